@@ -1,0 +1,353 @@
+//! The fixed-rate line-juggler controller: validate input, estimate, mirror law, track,
+//! limit; or the safe state with a fault code.
+//!
+//! One [`Controller::step`] per control period `dt`: it takes the latest [`SensorFrame`] and
+//! returns an [`ActuatorCommand`]. Its work per call is bounded and constant (no loops), it
+//! allocates nothing, and it never panics: every input, finite or not, yields either a
+//! finite command within the paddle limits, or the safe command with a fault code.
+//!
+//! ## Safe state
+//! On a non-finite or out-of-range measurement, or when the sample sequence number has not
+//! advanced for more than `stale_limit_steps` periods, the command is
+//! [`Mode::Safe`] with the [`Fault`] and a braking acceleration that brings the last known
+//! paddle velocity to rest as fast as `accel_max` allows (the paddle stops where it is; it
+//! is not driven anywhere). The estimator is reset. The fault is not latched: the next valid
+//! frame restarts estimation, the paddle is held at `home_height_m` ([`Mode::Hold`]) until
+//! the estimate is valid again, and then tracks ([`Mode::Track`]).
+
+use crate::estimate::{BallEstimator, Estimate, EstimatorParams};
+use crate::mirror::{MirrorLaw, PaddleReference};
+use crate::params::{finite, positive, within, ParamError};
+use crate::protocol::{ActuatorCommand, Fault, Mode, SensorFrame, Telemetry};
+use crate::state::PaddleState;
+use crate::track::{PaddleLimits, Tracker};
+use serde::{Deserialize, Serialize};
+
+/// Everything a line-juggler controller needs, SI units, f32 (sent over the wire in HIL).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ControllerParams {
+    /// Control period, s (> 0).
+    pub dt_s: f32,
+    /// Gravity, m/s^2 (> 0).
+    pub gravity_mps2: f32,
+    /// Mirror gain kappa0, dimensionless, in [0, 1) (Rizzi & Koditschek eq. 5).
+    pub kappa0: f32,
+    /// Energy-feedback gain kappa1, s^2/m^2 (>= 0) (eq. 5).
+    pub kappa1_s2pm2: f32,
+    /// Target apex height h*, m (> 0); eta* = g h*.
+    pub target_apex_m: f32,
+    /// Tracking stiffness, 1/s^2.
+    pub kp_per_s2: f32,
+    /// Tracking damping, 1/s.
+    pub kd_per_s: f32,
+    /// Paddle height held while there is no valid estimate, m (within the limits).
+    pub home_height_m: f32,
+    /// Paddle limits.
+    pub limits: PaddleLimits,
+    /// Ball estimator tuning.
+    pub estimator: EstimatorParams,
+    /// Plausible ball heights, m: measurements outside `[min, max]` are a fault.
+    pub ball_height_min_m: f32,
+    /// See `ball_height_min_m`.
+    pub ball_height_max_m: f32,
+    /// Periods without a new sample before the input counts as stale (>= 1).
+    pub stale_limit_steps: u16,
+}
+
+impl Default for ControllerParams {
+    /// A 500 Hz controller for a 1 m juggle with restitution 0.8.
+    fn default() -> Self {
+        let alpha = 0.8f32;
+        Self {
+            dt_s: 0.002,
+            gravity_mps2: 9.81,
+            kappa0: (1.0 - alpha) / (1.0 + alpha),
+            kappa1_s2pm2: 0.02,
+            target_apex_m: 1.0,
+            kp_per_s2: 2500.0,
+            kd_per_s: 100.0,
+            home_height_m: 0.0,
+            limits: PaddleLimits::default(),
+            estimator: EstimatorParams {
+                restitution: alpha,
+                ..EstimatorParams::default()
+            },
+            ball_height_min_m: -0.5,
+            ball_height_max_m: 20.0,
+            stale_limit_steps: 5,
+        }
+    }
+}
+
+impl ControllerParams {
+    /// Check every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        positive("dt_s", self.dt_s)?;
+        MirrorLaw::new(self.kappa0, self.kappa1_s2pm2, self.target_apex_m, self.gravity_mps2)?;
+        Tracker::new(self.kp_per_s2, self.kd_per_s, self.limits, self.dt_s)?;
+        within(
+            "home_height_m",
+            self.home_height_m,
+            self.limits.min_height_m,
+            self.limits.max_height_m,
+        )?;
+        self.estimator.validate()?;
+        finite("ball_height_min_m", self.ball_height_min_m)?;
+        finite("ball_height_max_m", self.ball_height_max_m)?;
+        if !(self.ball_height_max_m > self.ball_height_min_m) {
+            return Err(ParamError::OutOfRange("ball_height_max_m"));
+        }
+        if self.stale_limit_steps == 0 {
+            return Err(ParamError::NotPositive("stale_limit_steps"));
+        }
+        Ok(())
+    }
+}
+
+/// The line-juggler controller (mirror law + estimator + tracker), stepped at a fixed rate.
+#[derive(Clone, Debug)]
+pub struct Controller {
+    params: ControllerParams,
+    law: MirrorLaw<f32>,
+    tracker: Tracker,
+    estimator: BallEstimator,
+    estimate: Estimate,
+    last_seq: Option<u32>,
+    stale_steps: u16,
+    /// Last valid paddle measurement, dead-reckoned with our own commands while faulted.
+    paddle: PaddleState<f32>,
+}
+
+impl Controller {
+    /// A controller; the error names the first invalid parameter.
+    pub fn new(params: ControllerParams) -> Result<Self, ParamError> {
+        params.validate()?;
+        let law = MirrorLaw::new(
+            params.kappa0,
+            params.kappa1_s2pm2,
+            params.target_apex_m,
+            params.gravity_mps2,
+        )?;
+        let tracker = Tracker::new(params.kp_per_s2, params.kd_per_s, params.limits, params.dt_s)?;
+        let estimator = BallEstimator::new(params.estimator, params.dt_s, params.gravity_mps2)?;
+        Ok(Self {
+            params,
+            law,
+            tracker,
+            estimator,
+            estimate: Estimate::default(),
+            last_seq: None,
+            stale_steps: 0,
+            paddle: PaddleState::new(params.home_height_m, 0.0),
+        })
+    }
+
+    /// The parameters this controller runs with.
+    pub fn params(&self) -> &ControllerParams {
+        &self.params
+    }
+
+    /// The mirror law in use.
+    pub fn law(&self) -> &MirrorLaw<f32> {
+        &self.law
+    }
+
+    /// The latest ball estimate.
+    pub fn estimate(&self) -> &Estimate {
+        &self.estimate
+    }
+
+    /// Telemetry fields the core knows (the firmware adds timing and link counts).
+    pub fn telemetry(&self) -> Telemetry {
+        Telemetry {
+            ball_height_est_m: self.estimate.ball.height_m,
+            ball_velocity_est_mps: self.estimate.ball.velocity_mps,
+            estimate_valid: self.estimate.valid,
+            ..Telemetry::default()
+        }
+    }
+
+    /// One control period: the command for `frame`.
+    pub fn step(&mut self, frame: &SensorFrame) -> ActuatorCommand {
+        match self.check(frame) {
+            Err(fault) => self.safe(frame.seq, fault),
+            Ok(fresh) => {
+                let paddle = PaddleState::new(frame.paddle_height_m, frame.paddle_velocity_mps);
+                self.paddle = paddle;
+                self.estimate = if fresh {
+                    self.estimator.update(frame.ball_height_m, &paddle)
+                } else {
+                    self.estimator.coast(&paddle)
+                };
+                let (reference, mode) = if self.estimate.valid {
+                    let r = self.tracker.clamp_reference(self.law.reference(&self.estimate.ball));
+                    (r, Mode::Track)
+                } else {
+                    let home = PaddleReference {
+                        height_m: self.params.home_height_m,
+                        velocity_mps: 0.0,
+                        accel_mps2: 0.0,
+                    };
+                    (home, Mode::Hold)
+                };
+                ActuatorCommand {
+                    seq: frame.seq,
+                    paddle_accel_mps2: self.tracker.command(&reference, &paddle),
+                    paddle_height_ref_m: reference.height_m,
+                    paddle_velocity_ref_mps: reference.velocity_mps,
+                    mode,
+                    fault: Fault::None,
+                }
+            }
+        }
+    }
+
+    /// The safe command for an external fault (e.g. the firmware's link timeout).
+    pub fn safe(&mut self, seq: u32, fault: Fault) -> ActuatorCommand {
+        self.estimator.reset();
+        self.estimate.valid = false;
+        let u = self.tracker.brake(&self.paddle);
+        // dead-reckon the paddle under our own braking command
+        let dt = self.params.dt_s;
+        self.paddle = PaddleState::new(
+            self.paddle.height_m + self.paddle.velocity_mps * dt + 0.5 * u * dt * dt,
+            self.paddle.velocity_mps + u * dt,
+        );
+        ActuatorCommand {
+            seq,
+            paddle_accel_mps2: u,
+            paddle_height_ref_m: self.paddle.height_m,
+            paddle_velocity_ref_mps: 0.0,
+            mode: Mode::Safe,
+            fault,
+        }
+    }
+
+    /// Validate a frame; `Ok(true)` if it carries a new sample, `Ok(false)` if it repeats
+    /// the last one (within the stale limit).
+    fn check(&mut self, frame: &SensorFrame) -> Result<bool, Fault> {
+        let values = [
+            frame.ball_height_m,
+            frame.paddle_height_m,
+            frame.paddle_velocity_mps,
+        ];
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(Fault::NonFinite);
+        }
+        let p = &self.params;
+        let l = &p.limits;
+        let travel_margin_m = 0.05 * (l.max_height_m - l.min_height_m);
+        if !(frame.ball_height_m >= p.ball_height_min_m && frame.ball_height_m <= p.ball_height_max_m)
+            || !(frame.paddle_height_m >= l.min_height_m - travel_margin_m
+                && frame.paddle_height_m <= l.max_height_m + travel_margin_m)
+            || frame.paddle_velocity_mps.abs() > 2.0 * l.velocity_max_mps
+        {
+            return Err(Fault::OutOfRange);
+        }
+        // a sample is new if its sequence number moved forward (wrapping arithmetic)
+        let fresh = match self.last_seq {
+            None => true,
+            Some(last) => {
+                let ahead = frame.seq.wrapping_sub(last);
+                ahead != 0 && ahead < u32::MAX / 2
+            }
+        };
+        if fresh {
+            self.last_seq = Some(frame.seq);
+            self.stale_steps = 0;
+            Ok(true)
+        } else {
+            self.stale_steps = self.stale_steps.saturating_add(1);
+            if self.stale_steps > self.params.stale_limit_steps {
+                Err(Fault::Stale)
+            } else {
+                Ok(false)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(seq: u32, ball: f32) -> SensorFrame {
+        SensorFrame {
+            seq,
+            ball_height_m: ball,
+            paddle_height_m: 0.0,
+            paddle_velocity_mps: 0.0,
+        }
+    }
+
+    #[test]
+    fn holds_home_until_estimate_is_valid_then_tracks() {
+        let mut c = Controller::new(ControllerParams::default()).unwrap();
+        let g = 9.81f32;
+        let mut mode = Mode::Hold;
+        for k in 0..60u32 {
+            let t = k as f32 * 0.002;
+            let cmd = c.step(&frame(k, 1.0 - 0.5 * g * t * t));
+            if k == 0 {
+                assert_eq!(cmd.mode, Mode::Hold);
+            }
+            mode = cmd.mode;
+            assert!(cmd.paddle_accel_mps2.abs() <= 200.0);
+        }
+        assert_eq!(mode, Mode::Track);
+        // reference is the mirror image: r = -k b with b ~ 1 - ... > 0, so r < 0
+        let cmd = c.step(&frame(60, 0.5));
+        assert!(cmd.paddle_height_ref_m < 0.0);
+    }
+
+    #[test]
+    fn nan_and_out_of_range_give_safe_state_with_fault() {
+        let mut c = Controller::new(ControllerParams::default()).unwrap();
+        let cmd = c.step(&frame(0, f32::NAN));
+        assert_eq!((cmd.mode, cmd.fault), (Mode::Safe, Fault::NonFinite));
+        let cmd = c.step(&frame(1, 1e6));
+        assert_eq!((cmd.mode, cmd.fault), (Mode::Safe, Fault::OutOfRange));
+        let mut f = frame(2, 0.5);
+        f.paddle_velocity_mps = f32::INFINITY;
+        assert_eq!(c.step(&f).fault, Fault::NonFinite);
+        // recovers on valid input
+        assert_eq!(c.step(&frame(3, 0.5)).fault, Fault::None);
+    }
+
+    #[test]
+    fn repeated_sequence_number_becomes_stale_after_the_limit() {
+        let mut c = Controller::new(ControllerParams::default()).unwrap();
+        assert_eq!(c.step(&frame(10, 0.5)).fault, Fault::None);
+        for _ in 0..5 {
+            assert_eq!(c.step(&frame(10, 0.5)).fault, Fault::None);
+        }
+        let cmd = c.step(&frame(10, 0.5));
+        assert_eq!((cmd.mode, cmd.fault), (Mode::Safe, Fault::Stale));
+        assert_eq!(c.step(&frame(11, 0.5)).fault, Fault::None);
+    }
+
+    #[test]
+    fn safe_state_brakes_the_paddle_to_rest() {
+        let mut c = Controller::new(ControllerParams::default()).unwrap();
+        let mut f = frame(0, 0.5);
+        f.paddle_velocity_mps = 1.0;
+        c.step(&f);
+        let mut v = 1.0f32;
+        for k in 0..10 {
+            let cmd = c.step(&frame(1 + k, f32::NAN));
+            v += cmd.paddle_accel_mps2 * 0.002;
+        }
+        assert!(v.abs() < 1e-5, "paddle still moving at {v}");
+    }
+
+    #[test]
+    fn invalid_params_are_named() {
+        let mut p = ControllerParams::default();
+        p.kappa0 = 1.2;
+        assert_eq!(Controller::new(p).unwrap_err(), ParamError::OutOfRange("kappa0"));
+        let mut p = ControllerParams::default();
+        p.home_height_m = 5.0;
+        assert_eq!(Controller::new(p).unwrap_err(), ParamError::OutOfRange("home_height_m"));
+    }
+}

@@ -1,0 +1,41 @@
+//! # dexter-core
+//!
+//! The `no_std`, allocation-free control core of dexter. The same code runs on a Cortex-M4F
+//! (`firmware/`) and inside the host simulator (`host-sim/`, software in the loop), so the
+//! simulator is an oracle for the firmware, bit for bit.
+//!
+//! Units are SI throughout (m, s, m/s, m/s^2, rad, N per kg of payload); field names carry
+//! their unit (`height_m`, `dt_s`). The core owns no clock, no I/O and no globals: time comes
+//! in as an argument (`dt_s`, sample sequence numbers).
+//!
+//! | module | what it holds | source |
+//! | --- | --- | --- |
+//! | [`math`] | the [`Real`](math::Real) scalar trait and the compile-time math backend | — |
+//! | [`params`] | validation errors that name the parameter | — |
+//! | [`state`] | ball and paddle states | — |
+//! | [`mirror`] | line-juggler mirror law with energy feedback | Rizzi & Koditschek 1994, eq. 5–9 |
+//! | [`tilt`] | kappa-tilt law, table-velocity energy feedback, stability limits | Zumel & Erdmann, eq. 3–4, 11, 16, 22–26 |
+//! | [`planar`] | planar juggler mirror law and the modified, solvable law | Rizzi & Koditschek 1994, eq. 11–16 |
+//! | [`hop`] | Raibert's fixed thrust and an energy-servo thrust | Koditschek & Bühler 1991, sec. 1.2, 3.1 |
+//! | [`estimate`] | fixed-rate ball-state estimator with impact re-initialisation | — |
+//! | [`track`] | paddle tracking: PD plus feed-forward within limits | — |
+//! | [`control`] | the fixed-rate [`Controller`](control::Controller) and its safe state | — |
+//! | [`protocol`] | wire types, postcard + CRC + COBS framing, typed decode errors | — |
+#![cfg_attr(not(test), no_std)]
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod control;
+pub mod estimate;
+pub mod hop;
+pub mod math;
+pub mod mirror;
+pub mod params;
+pub mod planar;
+pub mod protocol;
+pub mod state;
+pub mod tilt;
+pub mod track;
+
+/// Standard gravity, m/s^2 (the default for scenes and controllers).
+pub const STANDARD_GRAVITY_MPS2: f32 = 9.806_65;

@@ -1,0 +1,326 @@
+//! Scalar arithmetic behind one API, with the math backend chosen at compile time.
+//!
+//! The laws are generic over [`Real`], implemented for `f32` (what the MCU runs) and `f64`
+//! (what the simulator's physics and its ideal-controller scenes use).
+//!
+//! For `f32` the transcendental functions come from one of two backends:
+//! - **accurate** (default): `libm` (`sqrtf`, `sinf`, `cosf`, `atan2f`), correctly rounded or
+//!   within 1 ulp. On a Cortex-M4F `sinf`/`cosf` cost 1,100–2,100 instructions a call because
+//!   libm computes their range reduction in f64, which the M4F does in software; `atan2f` ~83.
+//! - **fast** (feature `fast-math`): `micromath`'s approximations: `sin`/`cos` ~27 instructions
+//!   at ~1e-3 absolute error, `atan2` ~1e-2 rad worst case, `sqrt` ~5 % worst case relative
+//!   error refined here by one Newton step.
+//!
+//! Independently of the backend, [`sin_poly_f32`] / [`cos_poly_f32`] give an own f32 odd/even
+//! polynomial with a documented error bound, cheap on an FPU, for laws that need sin/cos in the
+//! control step. The line-juggler step needs none of them: it is polynomial in the ball state.
+//!
+//! `f64` always uses `libm` (host only in practice).
+
+use core::fmt::Debug;
+use core::ops::{Add, Div, Mul, Neg, Sub};
+
+/// A real scalar: `f32` on the target, `f32` or `f64` on the host.
+pub trait Real:
+    Copy
+    + Debug
+    + PartialOrd
+    + Default
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// 0.
+    const ZERO: Self;
+    /// 1.
+    const ONE: Self;
+    /// 2.
+    const TWO: Self;
+    /// 1/2.
+    const HALF: Self;
+    /// pi.
+    const PI: Self;
+    /// Conversion from an `f64` constant (rounds to nearest for `f32`).
+    fn of(value: f64) -> Self;
+    /// Widening to `f64` (exact).
+    fn to_f64(self) -> f64;
+    /// Square root; NaN for negative input.
+    fn sqrt(self) -> Self;
+    /// Sine of an angle in rad.
+    fn sin(self) -> Self;
+    /// Cosine of an angle in rad.
+    fn cos(self) -> Self;
+    /// Four-quadrant arctangent of `self / x`, rad in (-pi, pi].
+    fn atan2(self, x: Self) -> Self;
+    /// Natural exponential.
+    fn exp(self) -> Self;
+    /// Natural logarithm.
+    fn ln(self) -> Self;
+    /// Absolute value.
+    fn abs(self) -> Self;
+    /// True unless NaN or infinite.
+    fn is_finite(self) -> bool;
+    /// The smaller of two values; NaN-free inputs assumed (returns `other` if `self` is NaN).
+    #[inline]
+    fn min_r(self, other: Self) -> Self {
+        if self < other {
+            self
+        } else {
+            other
+        }
+    }
+    /// The larger of two values (returns `other` if `self` is NaN).
+    #[inline]
+    fn max_r(self, other: Self) -> Self {
+        if self > other {
+            self
+        } else {
+            other
+        }
+    }
+    /// Clamp to `[lo, hi]` (`lo <= hi` assumed); NaN maps to `lo`.
+    #[inline]
+    fn clamp_r(self, lo: Self, hi: Self) -> Self {
+        if self > hi {
+            hi
+        } else if self >= lo {
+            self
+        } else {
+            lo
+        }
+    }
+}
+
+impl Real for f64 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const TWO: Self = 2.0;
+    const HALF: Self = 0.5;
+    const PI: Self = core::f64::consts::PI;
+    #[inline]
+    fn of(value: f64) -> Self {
+        value
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self
+    }
+    #[inline]
+    fn sqrt(self) -> Self {
+        libm::sqrt(self)
+    }
+    #[inline]
+    fn sin(self) -> Self {
+        libm::sin(self)
+    }
+    #[inline]
+    fn cos(self) -> Self {
+        libm::cos(self)
+    }
+    #[inline]
+    fn atan2(self, x: Self) -> Self {
+        libm::atan2(self, x)
+    }
+    #[inline]
+    fn exp(self) -> Self {
+        libm::exp(self)
+    }
+    #[inline]
+    fn ln(self) -> Self {
+        libm::log(self)
+    }
+    #[inline]
+    fn abs(self) -> Self {
+        libm::fabs(self)
+    }
+    #[inline]
+    fn is_finite(self) -> bool {
+        f64::is_finite(self)
+    }
+}
+
+impl Real for f32 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const TWO: Self = 2.0;
+    const HALF: Self = 0.5;
+    const PI: Self = core::f32::consts::PI;
+    #[inline]
+    fn of(value: f64) -> Self {
+        value as f32
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
+    #[inline]
+    fn sqrt(self) -> Self {
+        backend::sqrt(self)
+    }
+    #[inline]
+    fn sin(self) -> Self {
+        backend::sin(self)
+    }
+    #[inline]
+    fn cos(self) -> Self {
+        backend::cos(self)
+    }
+    #[inline]
+    fn atan2(self, x: Self) -> Self {
+        backend::atan2(self, x)
+    }
+    #[inline]
+    fn exp(self) -> Self {
+        backend::exp(self)
+    }
+    #[inline]
+    fn ln(self) -> Self {
+        backend::ln(self)
+    }
+    #[inline]
+    fn abs(self) -> Self {
+        libm::fabsf(self)
+    }
+    #[inline]
+    fn is_finite(self) -> bool {
+        f32::is_finite(self)
+    }
+}
+
+/// Name of the `f32` backend compiled in: `"libm"` or `"micromath"`.
+pub const BACKEND: &str = backend::NAME;
+
+#[cfg(not(feature = "fast-math"))]
+mod backend {
+    pub const NAME: &str = "libm";
+    #[inline]
+    pub fn sqrt(x: f32) -> f32 {
+        libm::sqrtf(x)
+    }
+    #[inline]
+    pub fn sin(x: f32) -> f32 {
+        libm::sinf(x)
+    }
+    #[inline]
+    pub fn cos(x: f32) -> f32 {
+        libm::cosf(x)
+    }
+    #[inline]
+    pub fn atan2(y: f32, x: f32) -> f32 {
+        libm::atan2f(y, x)
+    }
+    #[inline]
+    pub fn exp(x: f32) -> f32 {
+        libm::expf(x)
+    }
+    #[inline]
+    pub fn ln(x: f32) -> f32 {
+        libm::logf(x)
+    }
+}
+
+#[cfg(feature = "fast-math")]
+mod backend {
+    use micromath::F32Ext;
+    pub const NAME: &str = "micromath";
+    #[inline]
+    pub fn sqrt(x: f32) -> f32 {
+        // micromath's sqrt is a bit-trick estimate (~5 % error); one Newton step brings it
+        // to ~0.2 %, a second to ~2e-6: what a step-size calculation needs.
+        if x <= 0.0 {
+            return if x == 0.0 { 0.0 } else { f32::NAN };
+        }
+        let y = F32Ext::sqrt(x);
+        let y = 0.5 * (y + x / y);
+        0.5 * (y + x / y)
+    }
+    #[inline]
+    pub fn sin(x: f32) -> f32 {
+        F32Ext::sin(x)
+    }
+    #[inline]
+    pub fn cos(x: f32) -> f32 {
+        F32Ext::cos(x)
+    }
+    #[inline]
+    pub fn atan2(y: f32, x: f32) -> f32 {
+        F32Ext::atan2(y, x)
+    }
+    #[inline]
+    pub fn exp(x: f32) -> f32 {
+        F32Ext::exp(x)
+    }
+    #[inline]
+    pub fn ln(x: f32) -> f32 {
+        F32Ext::ln(x)
+    }
+}
+
+/// Sine by an odd degree-9 minimax-style polynomial after reduction to [-pi/2, pi/2], f32.
+///
+/// Valid for |x| <= 1e4 rad (a bounded, loop-free range reduction by rounding to a multiple
+/// of pi). Absolute error <= 2e-6 over [-pi, pi] (tested against `f64` sine); no f64 and no
+/// loop, ~20 FPU instructions on a Cortex-M4F.
+pub fn sin_poly_f32(x: f32) -> f32 {
+    const INV_PI: f32 = core::f32::consts::FRAC_1_PI;
+    // pi split in two for an accurate reduction x - k*pi
+    const PI_HI: f32 = 3.140_625;
+    const PI_LO: f32 = 9.676_536e-4;
+    let k = libm::roundf(x * INV_PI);
+    let r = (x - k * PI_HI) - k * PI_LO;
+    // Taylor coefficients to degree 11 on [-pi/2, pi/2]: truncation error < 6e-8 * ...
+    let r2 = r * r;
+    let p = r
+        * (1.0
+            + r2 * (-1.666_666_7e-1
+                + r2 * (8.333_333e-3
+                    + r2 * (-1.984_127e-4 + r2 * (2.755_731_9e-6 + r2 * -2.505_210_8e-8)))));
+    // sin(r + k*pi) = (-1)^k sin(r); k is exact in f32 for |x| <= 1e4
+    if (k as i32) & 1 == 0 {
+        p
+    } else {
+        -p
+    }
+}
+
+/// Cosine via [`sin_poly_f32`]: cos x = sin(x + pi/2). Same error bound, f32.
+pub fn cos_poly_f32(x: f32) -> f32 {
+    sin_poly_f32(x + core::f32::consts::FRAC_PI_2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn poly_sin_cos_error_bound_holds_over_two_periods() {
+        let mut worst = 0.0f64;
+        for i in 0..=20_000 {
+            let x = -2.0 * core::f64::consts::PI + 4.0 * core::f64::consts::PI * (i as f64) / 20_000.0;
+            let xs = x as f32;
+            let es = (sin_poly_f32(xs) as f64 - (xs as f64).sin()).abs();
+            let ec = (cos_poly_f32(xs) as f64 - (xs as f64).cos()).abs();
+            worst = worst.max(es).max(ec);
+        }
+        assert!(worst <= 2e-6, "worst abs error {worst:e}");
+    }
+
+    #[test]
+    fn backend_sqrt_is_accurate_enough_for_either_backend() {
+        for &x in &[1e-6f32, 0.01, 0.5, 2.0, 9.81, 1234.5, 1e6] {
+            let rel = ((x.sqrt() as f64) - (x as f64).sqrt()).abs() / (x as f64).sqrt();
+            assert!(rel < 1e-5, "sqrt({x}) rel error {rel:e} with {BACKEND}");
+        }
+        assert_eq!(Real::sqrt(0.0f32), 0.0);
+        assert!(Real::sqrt(-1.0f32).is_nan());
+    }
+
+    #[test]
+    fn clamp_maps_nan_to_lower_bound() {
+        assert_eq!(f32::NAN.clamp_r(-1.0, 1.0), -1.0);
+        assert_eq!(5.0f32.clamp_r(-1.0, 1.0), 1.0);
+        assert_eq!(0.25f64.clamp_r(-1.0, 1.0), 0.25);
+    }
+}

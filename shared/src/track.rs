@@ -1,0 +1,188 @@
+//! Paddle tracking: PD plus acceleration feed-forward, kept within position, velocity and
+//! acceleration limits.
+//!
+//! The paddle is driven by an acceleration command held for one control period `dt`
+//! (zero-order hold). The command is
+//!
+//! ```text
+//! u = r''_ref + kp (r_ref - r) + kd (r'_ref - r')
+//! ```
+//!
+//! then limited so that after one period the velocity stays within `±velocity_max` and
+//! within the speed from which the paddle can still stop before its travel limits at
+//! `accel_max` (`sqrt(2 a_max d)`), and finally clamped to `±accel_max`.
+
+use crate::math::Real;
+use crate::mirror::PaddleReference;
+use crate::params::{finite, positive, ParamError};
+use crate::state::PaddleState;
+use serde::{Deserialize, Serialize};
+
+/// Limits of the paddle actuator, SI units.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PaddleLimits {
+    /// Lowest paddle height, m.
+    pub min_height_m: f32,
+    /// Highest paddle height, m (> min).
+    pub max_height_m: f32,
+    /// Largest paddle speed, m/s (> 0).
+    pub velocity_max_mps: f32,
+    /// Largest paddle acceleration magnitude, m/s^2 (> 0).
+    pub accel_max_mps2: f32,
+}
+
+impl Default for PaddleLimits {
+    fn default() -> Self {
+        Self {
+            min_height_m: -0.3,
+            max_height_m: 0.1,
+            velocity_max_mps: 3.0,
+            accel_max_mps2: 200.0,
+        }
+    }
+}
+
+impl PaddleLimits {
+    /// Check every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        finite("limits.min_height_m", self.min_height_m)?;
+        finite("limits.max_height_m", self.max_height_m)?;
+        if !(self.max_height_m > self.min_height_m) {
+            return Err(ParamError::OutOfRange("limits.max_height_m"));
+        }
+        positive("limits.velocity_max_mps", self.velocity_max_mps)?;
+        positive("limits.accel_max_mps2", self.accel_max_mps2)?;
+        Ok(())
+    }
+}
+
+/// PD-plus-feed-forward paddle tracker with limits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tracker {
+    kp_per_s2: f32,
+    kd_per_s: f32,
+    limits: PaddleLimits,
+    dt_s: f32,
+}
+
+impl Tracker {
+    /// A tracker with stiffness `kp_per_s2` (1/s^2, >= 0), damping `kd_per_s` (1/s, >= 0),
+    /// `limits`, and control period `dt_s` (s, > 0).
+    pub fn new(kp_per_s2: f32, kd_per_s: f32, limits: PaddleLimits, dt_s: f32) -> Result<Self, ParamError> {
+        crate::params::non_negative("tracking.kp_per_s2", kp_per_s2)?;
+        crate::params::non_negative("tracking.kd_per_s", kd_per_s)?;
+        limits.validate()?;
+        positive("dt_s", dt_s)?;
+        Ok(Self {
+            kp_per_s2,
+            kd_per_s,
+            limits,
+            dt_s,
+        })
+    }
+
+    /// The limits this tracker enforces.
+    pub fn limits(&self) -> &PaddleLimits {
+        &self.limits
+    }
+
+    /// Clamp a reference into the travel range (zeroing its velocity and acceleration where
+    /// the position is clamped).
+    pub fn clamp_reference(&self, r: PaddleReference<f32>) -> PaddleReference<f32> {
+        let l = &self.limits;
+        if r.height_m > l.max_height_m || r.height_m < l.min_height_m {
+            PaddleReference {
+                height_m: r.height_m.clamp_r(l.min_height_m, l.max_height_m),
+                velocity_mps: 0.0,
+                accel_mps2: 0.0,
+            }
+        } else {
+            PaddleReference {
+                height_m: r.height_m,
+                velocity_mps: r.velocity_mps.clamp_r(-l.velocity_max_mps, l.velocity_max_mps),
+                accel_mps2: r.accel_mps2,
+            }
+        }
+    }
+
+    /// Acceleration command (m/s^2) that tracks `reference` from `paddle`, within limits.
+    /// Finite inputs give a finite output in `[-accel_max, accel_max]`.
+    pub fn command(&self, reference: &PaddleReference<f32>, paddle: &PaddleState<f32>) -> f32 {
+        let u = reference.accel_mps2
+            + self.kp_per_s2 * (reference.height_m - paddle.height_m)
+            + self.kd_per_s * (reference.velocity_mps - paddle.velocity_mps);
+        self.limit(u, paddle)
+    }
+
+    /// Deceleration to rest (the safe state): the acceleration that stops the paddle in one
+    /// period if it can, else the largest braking acceleration.
+    pub fn brake(&self, paddle: &PaddleState<f32>) -> f32 {
+        let a = self.limits.accel_max_mps2;
+        (-paddle.velocity_mps / self.dt_s).clamp_r(-a, a)
+    }
+
+    fn limit(&self, u: f32, paddle: &PaddleState<f32>) -> f32 {
+        let l = &self.limits;
+        let a = l.accel_max_mps2;
+        // speed from which the paddle can still stop before each end of its travel
+        let up_room = (l.max_height_m - paddle.height_m).max_r(0.0);
+        let down_room = (paddle.height_m - l.min_height_m).max_r(0.0);
+        let v_up = l.velocity_max_mps.min_r((2.0 * a * up_room).sqrt());
+        let v_down = l.velocity_max_mps.min_r((2.0 * a * down_room).sqrt());
+        let v_next = (paddle.velocity_mps + u * self.dt_s).clamp_r(-v_down, v_up);
+        ((v_next - paddle.velocity_mps) / self.dt_s).clamp_r(-a, a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tracker() -> Tracker {
+        Tracker::new(2500.0, 100.0, PaddleLimits::default(), 0.002).unwrap()
+    }
+
+    #[test]
+    fn pd_plus_feedforward_within_limits() {
+        let t = tracker();
+        let r = PaddleReference {
+            height_m: -0.05,
+            velocity_mps: 0.2,
+            accel_mps2: 1.0,
+        };
+        let p = PaddleState::new(-0.051, 0.19);
+        let expected = 1.0 + 2500.0 * 0.001 + 100.0 * 0.01;
+        assert!((t.command(&r, &p) - expected).abs() < 1e-4);
+    }
+
+    #[test]
+    fn acceleration_and_travel_limits_hold() {
+        let t = tracker();
+        let far = PaddleReference {
+            height_m: 10.0,
+            velocity_mps: 50.0,
+            accel_mps2: 1e6,
+        };
+        let u = t.command(&far, &PaddleState::new(0.0, 0.0));
+        assert_eq!(u, 200.0);
+        // at the top end moving up: must brake
+        let u = t.command(&far, &PaddleState::new(0.1, 1.0));
+        assert!(u < 0.0);
+        // nan in the reference still gives a value within limits
+        let nan = PaddleReference {
+            height_m: f32::NAN,
+            velocity_mps: 0.0,
+            accel_mps2: 0.0,
+        };
+        let u = t.command(&nan, &PaddleState::new(0.0, 0.0));
+        assert!(u.is_finite() && u.abs() <= 200.0);
+    }
+
+    #[test]
+    fn brake_stops_in_one_step_when_it_can() {
+        let t = tracker();
+        assert!((t.brake(&PaddleState::new(0.0, 0.2)) + 100.0).abs() < 1e-3);
+        assert_eq!(t.brake(&PaddleState::new(0.0, -3.0)), 200.0);
+    }
+}
