@@ -1,0 +1,90 @@
+//! The controller side of a closed-loop run, behind one trait so the same plant can be
+//! closed through the core linked in (SIL) or through the firmware in QEMU (HIL).
+
+use dexter_core::control::{Controller, ControllerParams};
+use dexter_core::params::ParamError;
+use dexter_core::protocol::{ActuatorCommand, SensorFrame, Telemetry};
+
+/// What one control step returns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepOutput {
+    /// The command to apply for the next control period.
+    pub command: ActuatorCommand,
+    /// Telemetry, when the controller reports it (the firmware does; SIL fills what the core knows).
+    pub telemetry: Telemetry,
+}
+
+/// Why a controller could not be stepped.
+#[derive(Debug)]
+pub enum ControllerError {
+    /// The parameters were rejected.
+    Params(ParamError),
+    /// The link to an external controller failed (I/O, timeout, emulator exited).
+    Link(String),
+}
+
+impl std::fmt::Display for ControllerError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ControllerError::Params(e) => write!(f, "controller parameter error: {e}"),
+            ControllerError::Link(e) => write!(f, "controller link error: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for ControllerError {}
+
+/// Timing and link figures of a hardware-in-the-loop run (the `--json` keys HIL adds).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct HilReport {
+    /// Fewest instructions one control step took on the target.
+    pub step_instructions_min: u32,
+    /// Mean instructions per control step on the target.
+    pub step_instructions_mean: f64,
+    /// Most instructions one control step took on the target.
+    pub step_instructions_max: u32,
+    /// Steps whose firmware command differed (bit for bit) from the SIL core's.
+    pub sil_mismatches: u64,
+    /// Frames rejected on the link, both directions (CRC, framing, decode).
+    pub link_errors: u64,
+    /// Control steps that exceeded the instruction budget.
+    pub over_budget_steps: u64,
+    /// Steps the firmware answered in its safe state because of a link timeout.
+    pub link_timeouts: u64,
+    /// Control steps per wall-clock second over the link.
+    pub steps_per_wall_second: f64,
+}
+
+/// A controller stepped once per control period with the plant's sensor frame.
+pub trait StepController {
+    /// One control step.
+    fn step(&mut self, frame: &SensorFrame) -> Result<StepOutput, ControllerError>;
+    /// HIL figures, for controllers that run on the target (None for SIL).
+    fn hil_report(&self) -> Option<HilReport> {
+        None
+    }
+}
+
+/// Software in the loop: the shared core, linked in, f32, the same code the firmware runs.
+pub struct Sil {
+    controller: Controller,
+}
+
+impl Sil {
+    /// A SIL controller from parameters.
+    pub fn new(params: ControllerParams) -> Result<Self, ControllerError> {
+        Ok(Self {
+            controller: Controller::new(params).map_err(ControllerError::Params)?,
+        })
+    }
+}
+
+impl StepController for Sil {
+    fn step(&mut self, frame: &SensorFrame) -> Result<StepOutput, ControllerError> {
+        let command = self.controller.step(frame);
+        Ok(StepOutput {
+            command,
+            telemetry: self.controller.telemetry(),
+        })
+    }
+}

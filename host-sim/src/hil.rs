@@ -1,0 +1,1 @@
+//! Hardware in the loop: the firmware in QEMU behind [`crate::controller::StepController`].
