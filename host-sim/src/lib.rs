@@ -8,3 +8,4 @@
 pub mod controller;
 pub mod hil;
 pub mod plot;
+pub mod trace;

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# All of dexter's tests, from a fresh machine: installs what it needs (the thumbv7em target
+# via rustup, qemu-system-arm from Debian) or stops saying exactly what to install.
+# Usage: scripts/test.sh            (CI runs exactly this through .ci/run)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+TARGET=thumbv7em-none-eabihf
+step() { printf '\n==> %s\n' "$*"; }
+die() { printf '\nerror: %s\n' "$*" >&2; exit 1; }
+
+step "checking the toolchain"
+command -v cargo >/dev/null || die "cargo not found: install Rust with rustup (https://rustup.rs)"
+if ! rustup target list --installed 2>/dev/null | grep -qx "$TARGET"; then
+  command -v rustup >/dev/null || die "the $TARGET target is missing and rustup is not available: install rustup, then run 'rustup target add $TARGET'"
+  step "installing the $TARGET target (rustup target add $TARGET)"
+  rustup target add "$TARGET" || die "could not install the target: run 'rustup target add $TARGET'"
+fi
+for comp in rustfmt clippy; do
+  if ! cargo "${comp/rustfmt/fmt}" --version >/dev/null 2>&1; then
+    rustup component add "$comp" || die "missing $comp: run 'rustup component add $comp'"
+  fi
+done
+
+if ! command -v qemu-system-arm >/dev/null; then
+  if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
+    step "installing qemu-system-arm from Debian (apt-get install qemu-system-arm)"
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm >/dev/null) \
+      || die "could not install QEMU: run 'sudo apt-get install qemu-system-arm'"
+  elif command -v apt-get >/dev/null && command -v sudo >/dev/null; then
+    step "installing qemu-system-arm from Debian (sudo apt-get install qemu-system-arm)"
+    (sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm >/dev/null) \
+      || die "could not install QEMU: run 'sudo apt-get install qemu-system-arm'"
+  else
+    die "qemu-system-arm (QEMU >= 7.2 with the mps2-an386 machine) is required for the hardware-in-the-loop tests: install it (Debian/Ubuntu: 'sudo apt-get install qemu-system-arm'; macOS: 'brew install qemu')"
+  fi
+fi
+qemu-system-arm -machine help | grep -q mps2-an386 || die "this qemu-system-arm lacks the mps2-an386 machine: install QEMU >= 7.2"
+
+step "formatting (cargo fmt --check)"
+cargo fmt --all -- --check
+
+step "lints (cargo clippy -D warnings), host crates and firmware"
+cargo clippy --all-targets -- -D warnings
+cargo clippy -p dexter-firmware --target "$TARGET" -- -D warnings
+
+step "the core builds for $TARGET with each math backend"
+cargo build -p dexter-core --target "$TARGET"
+cargo build -p dexter-core --target "$TARGET" --features fast-math
+
+step "the firmware builds for $TARGET (release)"
+cargo build -p dexter-firmware --release --target "$TARGET"
+
+step "unit, property, paper-reproduction and HIL tests (cargo test)"
+cargo test --all-targets
+
+step "documentation builds without warnings"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -q
+
+echo
+echo "all tests passed"
