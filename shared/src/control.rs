@@ -84,7 +84,12 @@ impl ControllerParams {
     /// Check every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ParamError> {
         positive("dt_s", self.dt_s)?;
-        MirrorLaw::new(self.kappa0, self.kappa1_s2pm2, self.target_apex_m, self.gravity_mps2)?;
+        MirrorLaw::new(
+            self.kappa0,
+            self.kappa1_s2pm2,
+            self.target_apex_m,
+            self.gravity_mps2,
+        )?;
         Tracker::new(self.kp_per_s2, self.kd_per_s, self.limits, self.dt_s)?;
         within(
             "home_height_m",
@@ -95,7 +100,7 @@ impl ControllerParams {
         self.estimator.validate()?;
         finite("ball_height_min_m", self.ball_height_min_m)?;
         finite("ball_height_max_m", self.ball_height_max_m)?;
-        if !(self.ball_height_max_m > self.ball_height_min_m) {
+        if self.ball_height_max_m <= self.ball_height_min_m {
             return Err(ParamError::OutOfRange("ball_height_max_m"));
         }
         if self.stale_limit_steps == 0 {
@@ -129,7 +134,12 @@ impl Controller {
             params.target_apex_m,
             params.gravity_mps2,
         )?;
-        let tracker = Tracker::new(params.kp_per_s2, params.kd_per_s, params.limits, params.dt_s)?;
+        let tracker = Tracker::new(
+            params.kp_per_s2,
+            params.kd_per_s,
+            params.limits,
+            params.dt_s,
+        )?;
         let estimator = BallEstimator::new(params.estimator, params.dt_s, params.gravity_mps2)?;
         Ok(Self {
             params,
@@ -181,7 +191,9 @@ impl Controller {
                     self.estimator.coast(&paddle)
                 };
                 let (reference, mode) = if self.estimate.valid {
-                    let r = self.tracker.clamp_reference(self.law.reference(&self.estimate.ball));
+                    let r = self
+                        .tracker
+                        .clamp_reference(self.law.reference(&self.estimate.ball));
                     (r, Mode::Track)
                 } else {
                     let home = PaddleReference {
@@ -238,9 +250,10 @@ impl Controller {
         let p = &self.params;
         let l = &p.limits;
         let travel_margin_m = 0.05 * (l.max_height_m - l.min_height_m);
-        if !(frame.ball_height_m >= p.ball_height_min_m && frame.ball_height_m <= p.ball_height_max_m)
-            || !(frame.paddle_height_m >= l.min_height_m - travel_margin_m
-                && frame.paddle_height_m <= l.max_height_m + travel_margin_m)
+        let ball_range = p.ball_height_min_m..=p.ball_height_max_m;
+        let paddle_range = (l.min_height_m - travel_margin_m)..=(l.max_height_m + travel_margin_m);
+        if !ball_range.contains(&frame.ball_height_m)
+            || !paddle_range.contains(&frame.paddle_height_m)
             || frame.paddle_velocity_mps.abs() > 2.0 * l.velocity_max_mps
         {
             return Err(Fault::OutOfRange);
@@ -343,11 +356,21 @@ mod tests {
 
     #[test]
     fn invalid_params_are_named() {
-        let mut p = ControllerParams::default();
-        p.kappa0 = 1.2;
-        assert_eq!(Controller::new(p).unwrap_err(), ParamError::OutOfRange("kappa0"));
-        let mut p = ControllerParams::default();
-        p.home_height_m = 5.0;
-        assert_eq!(Controller::new(p).unwrap_err(), ParamError::OutOfRange("home_height_m"));
+        let p = ControllerParams {
+            kappa0: 1.2,
+            ..ControllerParams::default()
+        };
+        assert_eq!(
+            Controller::new(p).unwrap_err(),
+            ParamError::OutOfRange("kappa0")
+        );
+        let p = ControllerParams {
+            home_height_m: 5.0,
+            ..ControllerParams::default()
+        };
+        assert_eq!(
+            Controller::new(p).unwrap_err(),
+            ParamError::OutOfRange("home_height_m")
+        );
     }
 }

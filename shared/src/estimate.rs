@@ -57,8 +57,18 @@ impl Default for EstimatorParams {
 impl EstimatorParams {
     /// Check every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ParamError> {
-        within("estimator.gain_position", self.gain_position, f32::MIN_POSITIVE, 1.0)?;
-        within("estimator.gain_velocity", self.gain_velocity, f32::MIN_POSITIVE, 1.999)?;
+        within(
+            "estimator.gain_position",
+            self.gain_position,
+            f32::MIN_POSITIVE,
+            1.0,
+        )?;
+        within(
+            "estimator.gain_velocity",
+            self.gain_velocity,
+            f32::MIN_POSITIVE,
+            1.999,
+        )?;
         positive("estimator.gate_m", self.gate_m)?;
         if self.reinit_after == 0 {
             return Err(ParamError::NotPositive("estimator.reinit_after"));
@@ -144,9 +154,8 @@ impl BallEstimator {
                 impact = self.apply_impact(&mut pred, paddle);
                 let innovation = z_m - pred.height_m;
                 if innovation.abs() <= self.params.gate_m {
-                    pred.height_m = pred.height_m + self.params.gain_position * innovation;
-                    pred.velocity_mps =
-                        pred.velocity_mps + (self.params.gain_velocity / dt) * innovation;
+                    pred.height_m += self.params.gain_position * innovation;
+                    pred.velocity_mps += (self.params.gain_velocity / dt) * innovation;
                     self.ball = pred;
                     self.outliers = 0;
                     self.phase = Phase::Tracking {
@@ -286,7 +295,10 @@ mod tests {
         let mut est = BallEstimator::new(EstimatorParams::default(), dt, G).unwrap();
         let paddle = PaddleState::new(-1.0, 0.0);
         for k in 0..40 {
-            est.update(BallState::new(1.0f32, 0.0).flown(k as f32 * dt, G).height_m, &paddle);
+            est.update(
+                BallState::new(1.0f32, 0.0).flown(k as f32 * dt, G).height_m,
+                &paddle,
+            );
         }
         // the ball jumps (an unmodelled hit): the estimate must follow within a few samples
         let mut out = Estimate::default();

@@ -324,7 +324,8 @@ mod tests {
     fn poly_sin_cos_error_bound_holds_over_two_periods() {
         let mut worst = 0.0f64;
         for i in 0..=20_000 {
-            let x = -2.0 * core::f64::consts::PI + 4.0 * core::f64::consts::PI * (i as f64) / 20_000.0;
+            let x =
+                -2.0 * core::f64::consts::PI + 4.0 * core::f64::consts::PI * (i as f64) / 20_000.0;
             let xs = x as f32;
             let es = (sin_poly_f32(xs) as f64 - (xs as f64).sin()).abs();
             let ec = (cos_poly_f32(xs) as f64 - (xs as f64).cos()).abs();

@@ -151,8 +151,7 @@ impl<R: Real> MirrorLaw<R> {
     pub fn fixed_point_speed_mps(&self, alpha: R) -> Option<R> {
         let matched = (R::ONE - alpha) / (R::ONE + alpha);
         let v2 = if self.kappa1_s2pm2 > R::ZERO {
-            R::TWO * self.target_energy_jpkg
-                + R::TWO * (self.kappa0 - matched) / self.kappa1_s2pm2
+            R::TWO * self.target_energy_jpkg + R::TWO * (self.kappa0 - matched) / self.kappa1_s2pm2
         } else if self.kappa0 == matched {
             R::TWO * self.target_energy_jpkg
         } else {

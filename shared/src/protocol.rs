@@ -318,7 +318,8 @@ impl<const N: usize> FrameDecoder<N> {
         } else {
             decode::<T>(&mut self.buf[..len])
         };
-        self.stats.count(result.as_ref().map(|_| ()).map_err(|e| *e));
+        self.stats
+            .count(result.as_ref().map(|_| ()).map_err(|e| *e));
         Some(result)
     }
 }

@@ -48,7 +48,7 @@ impl PaddleLimits {
     pub fn validate(&self) -> Result<(), ParamError> {
         finite("limits.min_height_m", self.min_height_m)?;
         finite("limits.max_height_m", self.max_height_m)?;
-        if !(self.max_height_m > self.min_height_m) {
+        if self.max_height_m <= self.min_height_m {
             return Err(ParamError::OutOfRange("limits.max_height_m"));
         }
         positive("limits.velocity_max_mps", self.velocity_max_mps)?;
@@ -69,7 +69,12 @@ pub struct Tracker {
 impl Tracker {
     /// A tracker with stiffness `kp_per_s2` (1/s^2, >= 0), damping `kd_per_s` (1/s, >= 0),
     /// `limits`, and control period `dt_s` (s, > 0).
-    pub fn new(kp_per_s2: f32, kd_per_s: f32, limits: PaddleLimits, dt_s: f32) -> Result<Self, ParamError> {
+    pub fn new(
+        kp_per_s2: f32,
+        kd_per_s: f32,
+        limits: PaddleLimits,
+        dt_s: f32,
+    ) -> Result<Self, ParamError> {
         crate::params::non_negative("tracking.kp_per_s2", kp_per_s2)?;
         crate::params::non_negative("tracking.kd_per_s", kd_per_s)?;
         limits.validate()?;
@@ -100,7 +105,9 @@ impl Tracker {
         } else {
             PaddleReference {
                 height_m: r.height_m,
-                velocity_mps: r.velocity_mps.clamp_r(-l.velocity_max_mps, l.velocity_max_mps),
+                velocity_mps: r
+                    .velocity_mps
+                    .clamp_r(-l.velocity_max_mps, l.velocity_max_mps),
                 accel_mps2: r.accel_mps2,
             }
         }

@@ -28,23 +28,25 @@ fn any_frame() -> impl Strategy<Value = SensorFrame> {
 
 /// Plausible frames with mostly increasing sequence numbers: exercises the tracking path.
 fn plausible_frames() -> impl Strategy<Value = Vec<SensorFrame>> {
-    prop::collection::vec((0u32..3, -0.4f32..5.0, -0.35f32..0.15, -5.0f32..5.0), 1..300).prop_map(
-        |steps| {
-            let mut seq = 0u32;
-            steps
-                .into_iter()
-                .map(|(ds, b, r, v)| {
-                    seq = seq.wrapping_add(ds);
-                    SensorFrame {
-                        seq,
-                        ball_height_m: b,
-                        paddle_height_m: r,
-                        paddle_velocity_mps: v,
-                    }
-                })
-                .collect()
-        },
+    prop::collection::vec(
+        (0u32..3, -0.4f32..5.0, -0.35f32..0.15, -5.0f32..5.0),
+        1..300,
     )
+    .prop_map(|steps| {
+        let mut seq = 0u32;
+        steps
+            .into_iter()
+            .map(|(ds, b, r, v)| {
+                seq = seq.wrapping_add(ds);
+                SensorFrame {
+                    seq,
+                    ball_height_m: b,
+                    paddle_height_m: r,
+                    paddle_velocity_mps: v,
+                }
+            })
+            .collect()
+    })
 }
 
 fn check(cmd: &dexter_core::protocol::ActuatorCommand, params: &ControllerParams) {
@@ -53,7 +55,10 @@ fn check(cmd: &dexter_core::protocol::ActuatorCommand, params: &ControllerParams
         cmd.paddle_accel_mps2.is_finite(),
         "non-finite command {cmd:?}"
     );
-    assert!(cmd.paddle_accel_mps2.abs() <= a, "command beyond limit {cmd:?}");
+    assert!(
+        cmd.paddle_accel_mps2.abs() <= a,
+        "command beyond limit {cmd:?}"
+    );
     assert!(cmd.paddle_height_ref_m.is_finite() && cmd.paddle_velocity_ref_mps.is_finite());
     match cmd.mode {
         Mode::Safe => assert_ne!(cmd.fault, Fault::None, "safe state without a fault code"),

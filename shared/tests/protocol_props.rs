@@ -32,24 +32,37 @@ fn device() -> impl Strategy<Value = DeviceMessage> {
     ];
     prop_oneof![
         any::<bool>().prop_map(|ok| DeviceMessage::Configured { ok }),
-        (any::<u32>(), f(), f(), f(), mode, fault, any::<[u32; 3]>(), f(), f(), any::<bool>())
-            .prop_map(|(seq, a, h, v, mode, fault, n, bh, bv, valid)| DeviceMessage::Output {
-                command: ActuatorCommand {
-                    seq,
-                    paddle_accel_mps2: a,
-                    paddle_height_ref_m: h,
-                    paddle_velocity_ref_mps: v,
-                    mode,
-                    fault,
-                },
-                telemetry: Telemetry {
-                    step_instructions: n[0],
-                    link_errors: n[1],
-                    frames_ok: n[2],
-                    ball_height_est_m: bh,
-                    ball_velocity_est_mps: bv,
-                    estimate_valid: valid,
-                },
+        (
+            any::<u32>(),
+            f(),
+            f(),
+            f(),
+            mode,
+            fault,
+            any::<[u32; 3]>(),
+            f(),
+            f(),
+            any::<bool>()
+        )
+            .prop_map(|(seq, a, h, v, mode, fault, n, bh, bv, valid)| {
+                DeviceMessage::Output {
+                    command: ActuatorCommand {
+                        seq,
+                        paddle_accel_mps2: a,
+                        paddle_height_ref_m: h,
+                        paddle_velocity_ref_mps: v,
+                        mode,
+                        fault,
+                    },
+                    telemetry: Telemetry {
+                        step_instructions: n[0],
+                        link_errors: n[1],
+                        frames_ok: n[2],
+                        ball_height_est_m: bh,
+                        ball_velocity_est_mps: bv,
+                        estimate_valid: valid,
+                    },
+                }
             }),
     ]
 }
@@ -149,6 +162,9 @@ fn truncated_and_empty_frames_are_typed_errors() {
     assert!(decode::<HostMessage>(&mut buf[..2]).is_err());
     assert!(decode::<HostMessage>(&mut [][..]).is_err());
     // one valid COBS byte group holding fewer bytes than a CRC
-    assert_eq!(decode::<HostMessage>(&mut [3, 1, 2][..]), Err(DecodeError::TooShort));
+    assert_eq!(
+        decode::<HostMessage>(&mut [3, 1, 2][..]),
+        Err(DecodeError::TooShort)
+    );
     assert!(n > 5);
 }
