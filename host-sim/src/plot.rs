@@ -1,1 +1,587 @@
 //! Plots (plotters, SVG and PNG).
+//!
+//! Every plot function writes two files, `{dir}/{stem}.svg` and `{dir}/{stem}.png`, each
+//! [`PLOT_SIZE`] pixels, creating `dir` if it is missing, and returns both paths (SVG first).
+//!
+//! The functions never panic on their input: non-finite points (NaN, ±inf) are skipped, input
+//! that is empty or has no finite point gives a [`PlotError`], and a degenerate range (all
+//! points equal) is widened so the axes still have a span.
+//!
+//! # Fonts
+//!
+//! plotters' bitmap backend needs a real font to draw text. Instead of the `ttf` feature
+//! (which needs the system's fontconfig and freetype), plotters is built with its `ab_glyph`
+//! feature and DejaVu Sans, embedded from the `dejavu` crate, is registered for the
+//! `sans-serif`, `serif` and `monospace` families the first time a plot is drawn. So the PNGs
+//! get readable text on a machine with no font packages at all. DejaVu fonts are under the
+//! Bitstream Vera licence (DejaVu changes are in the public domain), which allows embedding
+//! and redistribution.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+
+use crate::trace::ImpactRow;
+
+/// Width and height, in pixels, of every plot (the PNG's size and the SVG's view box).
+pub const PLOT_SIZE: (u32, u32) = (1024, 768);
+
+const FONT: &str = "sans-serif";
+const TITLE_SIZE: u32 = 30;
+const AXIS_DESC_SIZE: u32 = 22;
+const TICK_LABEL_SIZE: u32 = 17;
+const LEGEND_SIZE: u32 = 18;
+
+/// What went wrong while making a plot.
+#[derive(Debug)]
+pub enum PlotError {
+    /// The input had nothing to plot (no points, or too few for this kind of plot).
+    EmptyInput {
+        /// Which plot's input, and what was missing.
+        what: &'static str,
+    },
+    /// The input had points, but none of them was finite (all NaN or infinite).
+    NoFiniteData {
+        /// Which plot's input.
+        what: &'static str,
+        /// How many points the input had.
+        points: usize,
+    },
+    /// An argument could not be used (an empty file stem, a range too wide to draw, ...).
+    InvalidArgument {
+        /// Which argument.
+        what: &'static str,
+        /// Why it could not be used.
+        reason: String,
+    },
+    /// Creating the directory or writing a file failed.
+    Io {
+        /// The directory or file concerned.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The plotting backend (or its font) reported an error while drawing or saving.
+    Backend {
+        /// The file being drawn.
+        path: PathBuf,
+        /// The backend's message.
+        message: String,
+    },
+}
+
+impl fmt::Display for PlotError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PlotError::EmptyInput { what } => write!(f, "nothing to plot: {what}"),
+            PlotError::NoFiniteData { what, points } => write!(
+                f,
+                "nothing to plot: {what}: none of the {points} points is finite (all NaN or infinite)"
+            ),
+            PlotError::InvalidArgument { what, reason } => {
+                write!(f, "cannot plot: invalid {what}: {reason}")
+            }
+            PlotError::Io { path, source } => {
+                write!(f, "plot I/O error on {}: {source}", path.display())
+            }
+            PlotError::Backend { path, message } => {
+                write!(f, "plotting backend error for {}: {message}", path.display())
+            }
+        }
+    }
+}
+
+impl std::error::Error for PlotError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            PlotError::Io { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
+
+/// Apex height per impact index, with the target apex as a dashed horizontal line: the picture
+/// of the controller's convergence.
+///
+/// Rows whose apex height is not finite are skipped (the line is broken there); the target line
+/// is left out if the target is not finite.
+pub fn apex_per_impact(
+    rows: &[ImpactRow],
+    target_apex_m: f64,
+    dir: &Path,
+    stem: &str,
+) -> Result<Vec<PathBuf>, PlotError> {
+    const WHAT: &str = "apex height per impact";
+    if rows.is_empty() {
+        return Err(PlotError::EmptyInput { what: WHAT });
+    }
+    let segments = finite_segments(rows.iter().map(|r| (r.index as f64, r.apex_height_m)));
+    if segments.is_empty() {
+        return Err(PlotError::NoFiniteData {
+            what: WHAT,
+            points: rows.len(),
+        });
+    }
+    let target = target_apex_m.is_finite().then_some(target_apex_m);
+    let x_range = span(segments.iter().flatten().map(|p| p.0), "impact index range")?;
+    let y_range = span(
+        segments.iter().flatten().map(|p| p.1).chain(target),
+        "apex height range",
+    )?;
+    let fig = ApexFigure {
+        segments,
+        target,
+        x_range,
+        y_range,
+    };
+    render(&fig, dir, stem)
+}
+
+/// Phase portrait of the ball: height b (m) on x, velocity b′ (m/s) on y, drawn as a line
+/// through the samples in order. A non-finite sample breaks the line.
+pub fn phase_portrait(
+    samples: &[(f64, f64)],
+    dir: &Path,
+    stem: &str,
+) -> Result<Vec<PathBuf>, PlotError> {
+    const WHAT: &str = "phase portrait samples";
+    if samples.is_empty() {
+        return Err(PlotError::EmptyInput { what: WHAT });
+    }
+    let segments = finite_segments(samples.iter().copied());
+    if segments.is_empty() {
+        return Err(PlotError::NoFiniteData {
+            what: WHAT,
+            points: samples.len(),
+        });
+    }
+    let x_range = span(segments.iter().flatten().map(|p| p.0), "height range")?;
+    let y_range = span(segments.iter().flatten().map(|p| p.1), "velocity range")?;
+    let fig = PhaseFigure {
+        segments,
+        x_range,
+        y_range,
+    };
+    render(&fig, dir, stem)
+}
+
+/// Return map of successive impact speeds: the points (v_n, v_{n+1}) with the identity line
+/// v_{n+1} = v_n (the paper's eq. 8 cubic return map picture). A fixed point of the map lies on
+/// the identity line.
+///
+/// Pairs where either speed is not finite are skipped; fewer than two speeds is an error.
+pub fn return_map(speeds: &[f64], dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
+    const WHAT: &str = "return map speeds (need at least two successive finite speeds)";
+    if speeds.len() < 2 {
+        return Err(PlotError::EmptyInput { what: WHAT });
+    }
+    let points: Vec<(f64, f64)> = speeds
+        .windows(2)
+        .map(|w| (w[0], w[1]))
+        .filter(|&(a, b)| a.is_finite() && b.is_finite())
+        .collect();
+    if points.is_empty() {
+        return Err(PlotError::NoFiniteData {
+            what: WHAT,
+            points: speeds.len(),
+        });
+    }
+    // One range for both axes, so that the identity line is the diagonal.
+    let range = span(points.iter().flat_map(|p| [p.0, p.1]), "speed range")?;
+    let fig = ReturnMapFigure { points, range };
+    render(&fig, dir, stem)
+}
+
+/// Bifurcation diagram: a scatter of (parameter value, late apex height) as many small dots.
+///
+/// `param_name` is the x axis label and should name the parameter with its unit, e.g.
+/// `"paddle amplitude A (m)"`. Points with a non-finite coordinate are skipped.
+pub fn bifurcation(
+    points: &[(f64, f64)],
+    param_name: &str,
+    dir: &Path,
+    stem: &str,
+) -> Result<Vec<PathBuf>, PlotError> {
+    const WHAT: &str = "bifurcation points";
+    if points.is_empty() {
+        return Err(PlotError::EmptyInput { what: WHAT });
+    }
+    let finite: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|&(p, a)| p.is_finite() && a.is_finite())
+        .collect();
+    if finite.is_empty() {
+        return Err(PlotError::NoFiniteData {
+            what: WHAT,
+            points: points.len(),
+        });
+    }
+    let x_range = span(finite.iter().map(|p| p.0), "parameter range")?;
+    let y_range = span(finite.iter().map(|p| p.1), "apex height range")?;
+    let param_name = param_name.trim();
+    let param_name = if param_name.is_empty() {
+        "parameter".to_string()
+    } else {
+        param_name.to_string()
+    };
+    let fig = BifurcationFigure {
+        points: finite,
+        param_name,
+        x_range,
+        y_range,
+    };
+    render(&fig, dir, stem)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Figures
+
+type DrawResult<DB> = Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+
+/// Something that can draw itself on any plotters backend (SVG and bitmap).
+trait Figure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB>;
+}
+
+struct ApexFigure {
+    segments: Vec<Vec<(f64, f64)>>,
+    target: Option<f64>,
+    x_range: (f64, f64),
+    y_range: (f64, f64),
+}
+
+impl Figure for ApexFigure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let mut chart = chart(root, "Apex height per impact", self.x_range, self.y_range)?;
+        mesh(&mut chart, "impact index n", "apex height (m)")?;
+        // The target first, so the apex line is drawn over it.
+        if let Some(target) = self.target {
+            let (x0, x1) = self.x_range;
+            let style = RED.stroke_width(2);
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x0, target), (x1, target)],
+                    10,
+                    6,
+                    style,
+                ))?
+                .label(format!("target {} m", fmt_num(target)))
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], RED.stroke_width(2)));
+        }
+        let total: usize = self.segments.iter().map(Vec::len).sum();
+        // Markers on every impact while they can be told apart.
+        let marker = if total <= 200 { 3 } else { 0 };
+        for (i, segment) in self.segments.iter().enumerate() {
+            let radius = if segment.len() == 1 {
+                marker.max(2)
+            } else {
+                marker
+            };
+            let annotated = chart.draw_series(
+                LineSeries::new(segment.iter().copied(), BLUE.filled().stroke_width(2))
+                    .point_size(radius),
+            )?;
+            if i == 0 {
+                annotated
+                    .label("apex height after impact n")
+                    .legend(|(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 24, y)], BLUE.stroke_width(2))
+                    });
+            }
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperRight)
+    }
+}
+
+struct PhaseFigure {
+    segments: Vec<Vec<(f64, f64)>>,
+    x_range: (f64, f64),
+    y_range: (f64, f64),
+}
+
+impl Figure for PhaseFigure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let mut chart = chart(root, "Ball phase portrait", self.x_range, self.y_range)?;
+        mesh(&mut chart, "ball height b (m)", "ball velocity b′ (m/s)")?;
+        for segment in &self.segments {
+            let radius = if segment.len() == 1 { 3 } else { 0 };
+            chart.draw_series(
+                LineSeries::new(segment.iter().copied(), BLUE.filled().stroke_width(2))
+                    .point_size(radius),
+            )?;
+        }
+        Ok(())
+    }
+}
+
+struct ReturnMapFigure {
+    points: Vec<(f64, f64)>,
+    range: (f64, f64),
+}
+
+impl Figure for ReturnMapFigure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let mut chart = chart(root, "Return map of impact speeds", self.range, self.range)?;
+        mesh(
+            &mut chart,
+            "impact speed v(n) (m/s)",
+            "next impact speed v(n+1) (m/s)",
+        )?;
+        let (lo, hi) = self.range;
+        chart
+            .draw_series(LineSeries::new(
+                [(lo, lo), (hi, hi)],
+                BLACK.mix(0.6).stroke_width(2),
+            ))?
+            .label("identity v(n+1) = v(n)")
+            .legend(|(x, y)| {
+                PathElement::new(vec![(x, y), (x + 24, y)], BLACK.mix(0.6).stroke_width(2))
+            });
+        let radius = if self.points.len() > 2000 { 1 } else { 3 };
+        chart
+            .draw_series(
+                self.points
+                    .iter()
+                    .map(|&p| Circle::new(p, radius, RED.mix(0.8).filled())),
+            )?
+            .label("(v(n), v(n+1))")
+            .legend(|(x, y)| Circle::new((x + 12, y), 4, RED.filled()));
+        // The identity line runs from lower left to upper right: keep the legend off it.
+        legend(&mut chart, SeriesLabelPosition::UpperLeft)
+    }
+}
+
+struct BifurcationFigure {
+    points: Vec<(f64, f64)>,
+    param_name: String,
+    x_range: (f64, f64),
+    y_range: (f64, f64),
+}
+
+impl Figure for BifurcationFigure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let title = "Bifurcation diagram of the late apex height";
+        let mut chart = chart(root, title, self.x_range, self.y_range)?;
+        mesh(&mut chart, &self.param_name, "late apex height (m)")?;
+        let dot = BLACK.mix(0.5).filled();
+        let radius = if self.points.len() > 2000 { 1 } else { 2 };
+        chart.draw_series(self.points.iter().map(|&p| Circle::new(p, radius, dot)))?;
+        Ok(())
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shared drawing helpers
+
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+fn chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> Result<Chart<'a, DB>, DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
+    ChartBuilder::on(root)
+        .caption(title, (FONT, TITLE_SIZE))
+        .margin(24)
+        .x_label_area_size(70)
+        .y_label_area_size(100)
+        .build_cartesian_2d(x0..x1, y0..y1)
+}
+
+fn mesh<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    x_desc: &str,
+    y_desc: &str,
+) -> DrawResult<DB> {
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .axis_desc_style((FONT, AXIS_DESC_SIZE))
+        .label_style((FONT, TICK_LABEL_SIZE))
+        .x_label_formatter(&|v| fmt_num(*v))
+        .y_label_formatter(&|v| fmt_num(*v))
+        .light_line_style(BLACK.mix(0.05))
+        .bold_line_style(BLACK.mix(0.15))
+        .draw()
+}
+
+fn legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Chart<'a, DB>,
+    position: SeriesLabelPosition,
+) -> DrawResult<DB> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font((FONT, LEGEND_SIZE))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.5))
+        .draw()
+}
+
+/// Splits points into runs of finite points; a non-finite point ends a run and is dropped.
+fn finite_segments(points: impl IntoIterator<Item = (f64, f64)>) -> Vec<Vec<(f64, f64)>> {
+    let mut segments = Vec::new();
+    let mut current = Vec::new();
+    for (x, y) in points {
+        if x.is_finite() && y.is_finite() {
+            current.push((x, y));
+        } else if !current.is_empty() {
+            segments.push(std::mem::take(&mut current));
+        }
+    }
+    if !current.is_empty() {
+        segments.push(current);
+    }
+    segments
+}
+
+/// A short, readable number: up to 4 significant digits, no trailing zeros, scientific
+/// notation for very large or very small magnitudes.
+fn fmt_num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return if v == 0.0 { "0".into() } else { format!("{v}") };
+    }
+    let mag = v.abs();
+    if !(1e-3..1e5).contains(&mag) {
+        let s = format!("{v:.3e}");
+        return match s.split_once('e') {
+            Some((mantissa, exp)) if mantissa.contains('.') => {
+                let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+                format!("{mantissa}e{exp}")
+            }
+            _ => s,
+        };
+    }
+    let decimals = (3 - mag.log10().floor() as i32).clamp(0, 6) as usize;
+    let s = format!("{v:.decimals$}");
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    };
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
+}
+
+/// The (min, max) of finite values, padded by 5 % of the span; a zero span is widened by 10 %
+/// of the magnitude (or by 1 around zero) so the axis keeps a width.
+fn span(
+    values: impl IntoIterator<Item = f64>,
+    what: &'static str,
+) -> Result<(f64, f64), PlotError> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.into_iter().filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if lo > hi {
+        return Err(PlotError::InvalidArgument {
+            what,
+            reason: "no finite value".into(),
+        });
+    }
+    let width = hi - lo;
+    let scale = lo.abs().max(hi.abs());
+    let (lo, hi) = if width <= scale * 1e-9 {
+        let pad = if scale > 0.0 { scale * 0.1 } else { 1.0 };
+        (lo - pad, hi + pad)
+    } else {
+        (lo - width * 0.05, hi + width * 0.05)
+    };
+    if !(lo.is_finite() && hi.is_finite() && (hi - lo).is_finite()) {
+        return Err(PlotError::InvalidArgument {
+            what,
+            reason: format!("values span too wide a range to draw ({lo:e} to {hi:e})"),
+        });
+    }
+    Ok((lo, hi))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Output
+
+/// Registers the embedded DejaVu Sans for the font families plotters asks for (once per
+/// process). Both backends need it: the bitmap backend to draw glyphs, the SVG backend to
+/// measure text for the layout.
+fn ensure_fonts() -> Result<(), String> {
+    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
+    REGISTERED
+        .get_or_init(|| {
+            let regular = dejavu::sans::regular();
+            let bold = dejavu::sans::bold();
+            let fonts: [(&str, FontStyle, &'static [u8]); 4] = [
+                ("sans-serif", FontStyle::Normal, regular),
+                ("sans-serif", FontStyle::Bold, bold),
+                ("serif", FontStyle::Normal, regular),
+                ("monospace", FontStyle::Normal, regular),
+            ];
+            for (family, style, bytes) in fonts {
+                register_font(family, style, bytes).map_err(|_| {
+                    format!("the embedded DejaVu Sans font could not be loaded for {family}")
+                })?;
+            }
+            Ok(())
+        })
+        .clone()
+}
+
+fn backend_error(path: &Path, message: impl fmt::Display) -> PlotError {
+    PlotError::Backend {
+        path: path.to_path_buf(),
+        message: message.to_string(),
+    }
+}
+
+/// Draws `fig` into `{dir}/{stem}.svg` and `{dir}/{stem}.png`.
+fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
+    if stem.is_empty() || stem.contains(['/', '\\']) || stem == "." || stem == ".." {
+        return Err(PlotError::InvalidArgument {
+            what: "file stem",
+            reason: format!("{stem:?} must be a non-empty file name without a directory"),
+        });
+    }
+    let svg_path = dir.join(format!("{stem}.svg"));
+    let png_path = dir.join(format!("{stem}.png"));
+    ensure_fonts().map_err(|m| backend_error(&png_path, m))?;
+    std::fs::create_dir_all(dir).map_err(|source| PlotError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+
+    // SVG: drawn into memory, then written, so a write failure is an I/O error with the path.
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area();
+        fig.draw(&root).map_err(|e| backend_error(&svg_path, e))?;
+        root.present().map_err(|e| backend_error(&svg_path, e))?;
+    }
+    std::fs::write(&svg_path, svg).map_err(|source| PlotError::Io {
+        path: svg_path.clone(),
+        source,
+    })?;
+
+    // PNG: check that the file can be created first, so an unwritable path is an I/O error
+    // rather than an opaque encoder error.
+    std::fs::File::create(&png_path).map_err(|source| PlotError::Io {
+        path: png_path.clone(),
+        source,
+    })?;
+    {
+        let root = BitMapBackend::new(&png_path, PLOT_SIZE).into_drawing_area();
+        fig.draw(&root).map_err(|e| backend_error(&png_path, e))?;
+        root.present().map_err(|e| backend_error(&png_path, e))?;
+    }
+    Ok(vec![svg_path, png_path])
+}
