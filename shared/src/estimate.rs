@@ -13,8 +13,13 @@
 //! after every impact. A measurement whose innovation exceeds the gate is treated as an
 //! outlier (the estimate coasts on the model); `reinit_after` outliers in a row mean the
 //! model lost the ball (an unmodelled impact, a wrong restitution), and the filter
-//! re-initialises from the last two measurements. Sensor latency `L` is compensated by
-//! predicting the output L seconds ahead. Every step does a fixed amount of work.
+//! re-initialises from the last two measurements. Every step does a fixed amount of work.
+//!
+//! Sensor latency `L`: a ball sample that arrives now was taken L seconds ago, while the
+//! paddle measurement is current. The filter state therefore lives at the sample time t - L
+//! and its impact checks use the paddle moved back to then (`r - r' L`); the output is the
+//! filter state flown L seconds forward to now, with the impact check against the current
+//! paddle state.
 
 use crate::params::{non_negative, positive, within, ParamError};
 use crate::state::{restitution_velocity, BallState, PaddleState};
@@ -151,7 +156,7 @@ impl BallEstimator {
             }
             Phase::Tracking { accepted } => {
                 let mut pred = self.ball.flown(dt, self.gravity_mps2);
-                impact = self.apply_impact(&mut pred, paddle);
+                impact = self.apply_impact(&mut pred, &self.paddle_at_sample_time(paddle));
                 let innovation = z_m - pred.height_m;
                 if innovation.abs() <= self.params.gate_m {
                     pred.height_m += self.params.gain_position * innovation;
@@ -180,7 +185,7 @@ impl BallEstimator {
         let mut impact = false;
         if let Phase::Tracking { .. } = self.phase {
             let mut pred = self.ball.flown(self.dt_s, self.gravity_mps2);
-            impact = self.apply_impact(&mut pred, paddle);
+            impact = self.apply_impact(&mut pred, &self.paddle_at_sample_time(paddle));
             self.ball = pred;
         }
         self.output(paddle, impact)
@@ -207,15 +212,18 @@ impl BallEstimator {
         }
     }
 
+    /// The paddle (measured now) moved back to the time the ball sample was taken.
+    fn paddle_at_sample_time(&self, paddle: &PaddleState<f32>) -> PaddleState<f32> {
+        PaddleState::new(
+            paddle.height_m - paddle.velocity_mps * self.params.latency_s,
+            paddle.velocity_mps,
+        )
+    }
+
     fn output(&self, paddle: &PaddleState<f32>, impact: bool) -> Estimate {
         let valid = matches!(self.phase, Phase::Tracking { accepted } if accepted >= self.params.settle_samples);
-        let latency = self.params.latency_s;
-        let mut now = self.ball.flown(latency, self.gravity_mps2);
-        let paddle_now = PaddleState::new(
-            paddle.height_m + paddle.velocity_mps * latency,
-            paddle.velocity_mps,
-        );
-        let impact = self.apply_impact(&mut now, &paddle_now) || impact;
+        let mut now = self.ball.flown(self.params.latency_s, self.gravity_mps2);
+        let impact = self.apply_impact(&mut now, paddle) || impact;
         Estimate {
             ball: now,
             valid,
@@ -329,6 +337,52 @@ mod tests {
         }
         let now = truth.flown(49.0 * dt + latency, G);
         assert!((out.ball.height_m - now.height_m).abs() < 1e-5);
+    }
+
+    /// Regression: with latency, an impact must be predicted when the ball meets the paddle
+    /// now, not when it meets where the paddle will be L seconds later (which flipped the
+    /// estimate, and the mirror reference, up to a control period early).
+    #[test]
+    fn latency_compensated_impact_is_not_predicted_early() {
+        let dt = 0.002f64;
+        let latency = 0.004f64;
+        let e = 0.8f64;
+        let g = G as f64;
+        let params = EstimatorParams {
+            latency_s: latency as f32,
+            restitution: e as f32,
+            ..EstimatorParams::default()
+        };
+        let mut est = BallEstimator::new(params, dt as f32, G).unwrap();
+        // paddle rises at 1 m/s from -0.1 m; ball falls from 1 m; meet when
+        // 1 - g t^2/2 = -0.1 + t  (the positive root)
+        let vp = 1.0f64;
+        let paddle = |t: f64| -0.1 + vp * t;
+        let t_hit = (-vp + (vp * vp + 2.0 * g * 1.1).sqrt()) / g;
+        let ball = |t: f64| {
+            if t < t_hit {
+                1.0 - 0.5 * g * t * t
+            } else {
+                let v_in = -g * t_hit;
+                let v_out = -e * v_in + (1.0 + e) * vp;
+                let s = t - t_hit;
+                paddle(t_hit) + v_out * s - 0.5 * g * s * s
+            }
+        };
+        let steps = ((t_hit + 0.03) / dt) as usize;
+        let mut first_up = None;
+        for k in 3..steps {
+            let now = k as f64 * dt;
+            let p = PaddleState::new(paddle(now) as f32, vp as f32);
+            let out = est.update(ball(now - latency) as f32, &p);
+            if out.valid && out.ball.velocity_mps > 0.0 && first_up.is_none() {
+                first_up = Some(now);
+            }
+        }
+        let first_up = first_up.expect("the estimate never saw the bounce");
+        // the estimate turns upward at the first sample at or after the true impact
+        assert!(first_up >= t_hit - 1e-9, "impact predicted {:.4} s early", t_hit - first_up);
+        assert!(first_up < t_hit + dt + 1e-9, "impact predicted {:.4} s late", first_up - t_hit);
     }
 
     #[test]
