@@ -1,1 +1,214 @@
-//! (to be written)
+//! Paper reproductions on the line juggler (Rizzi & Koditschek sec. 2) and the passive
+//! bounce, against closed forms computed here, independently of the simulator.
+
+mod common {
+    //! Scene loading for these tests.
+    use dexter_sim::run::{run_scene, RunOptions, RunOutcome};
+    use dexter_sim::scene::{parse_set, Scene};
+    use std::path::PathBuf;
+
+    /// The workspace's `scenes/` directory.
+    pub fn scenes_dir() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join("scenes")
+    }
+
+    /// Load `scenes/<name>.toml` with `key=value` overrides.
+    pub fn load_scene(name: &str, sets: &[&str]) -> Scene {
+        let overrides: Vec<_> = sets
+            .iter()
+            .map(|s| parse_set(s).expect("override"))
+            .collect();
+        Scene::load(&scenes_dir().join(format!("{name}.toml")), &overrides).expect("scene loads")
+    }
+
+    /// Run a scene keeping every impact row.
+    pub fn run_rows(scene: &Scene) -> RunOutcome {
+        let opts = RunOptions {
+            record_rows: true,
+            ..RunOptions::default()
+        };
+        run_scene(scene, &opts, None).expect("run")
+    }
+
+    /// |a - b| / |b|.
+    pub fn rel(a: f64, b: f64) -> f64 {
+        ((a - b) / b).abs()
+    }
+}
+
+use common::{load_scene, rel, run_rows};
+use dexter_sim::report::Summary;
+
+/// Passive bounce from apex h0 with restitution e: the n-th impact (0-based) happens at
+/// t0 + 2 v0 e (1 - e^n) / (g (1 - e)), t0 = sqrt(2 h0 / g), v0 = sqrt(2 g h0), and the
+/// apex after it is e^(2(n+1)) h0.
+fn passive_closed_form(h0: f64, g: f64, e: f64, n: i32) -> (f64, f64) {
+    let t0 = (2.0 * h0 / g).sqrt();
+    let v0 = (2.0 * g * h0).sqrt();
+    let t = t0 + 2.0 * v0 * e * (1.0 - e.powi(n)) / (g * (1.0 - e));
+    (t, e.powi(2 * (n + 1)) * h0)
+}
+
+#[test]
+fn passive_bounce_matches_closed_form_then_rests() {
+    let scene = load_scene("passive-bounce", &[]);
+    let (h0, g, e) = (1.0, 9.81, 0.8);
+    assert_eq!(
+        (
+            scene.ball.height_m,
+            scene.physics.gravity_mps2,
+            scene.physics.restitution
+        ),
+        (h0, g, e)
+    );
+    let out = run_rows(&scene);
+    assert!(out.rows.len() > 40);
+    let mut worst_t = 0.0f64;
+    let mut worst_apex = 0.0f64;
+    for (n, row) in out.rows.iter().take(40).enumerate() {
+        let (t, apex) = passive_closed_form(h0, g, e, n as i32);
+        worst_t = worst_t.max(rel(row.time_s, t));
+        worst_apex = worst_apex.max(rel(row.apex_height_m, apex));
+    }
+    println!("passive bounce, 40 impacts: worst relative error time {worst_t:.2e}, apex {worst_apex:.2e}");
+    assert!(worst_t <= 1e-12, "impact time error {worst_t}");
+    assert!(worst_apex <= 1e-12, "apex error {worst_apex}");
+    // then resting contact, at the Zeno limit t0 + 2 e v0 / (g (1 - e))
+    let s = Summary::new(&scene, &out);
+    assert!(s.resting_contact);
+    let v0 = (2.0 * g * h0).sqrt();
+    let t_inf = (2.0 * h0 / g).sqrt() + 2.0 * e * v0 / (g * (1.0 - e));
+    let t_rest = s.resting_since_s.unwrap();
+    println!(
+        "Zeno limit {t_rest} s vs closed form {t_inf} s (rel {:.2e})",
+        rel(t_rest, t_inf)
+    );
+    assert!(rel(t_rest, t_inf) <= 1e-12);
+    // it rested once the take-off speed e^N v0 fell below the 1e-6 m/s threshold
+    let n = out.impacts as i32;
+    assert!(
+        e.powi(n) * v0 <= 1e-6 && e.powi(n - 1) * v0 > 1e-6,
+        "rested after {n} impacts"
+    );
+}
+
+/// Eq. 8 with beta = (1 + alpha) kappa1 / 2 and v*^2 = 2 g h*.
+fn eq8(v: f64, alpha: f64, kappa1: f64, g: f64, target: f64) -> f64 {
+    let beta = 0.5 * (1.0 + alpha) * kappa1;
+    v * (1.0 - beta * (v * v - 2.0 * g * target))
+}
+
+#[test]
+fn ideal_juggler_follows_the_cubic_return_map() {
+    let scene = load_scene("line-juggler-ideal", &[]);
+    let (alpha, kappa1, g, target) = (0.8, 0.05, 9.81, 1.0);
+    assert_eq!(scene.control.kappa1_s2pm2, kappa1);
+    assert!(
+        scene.ball.height_m < 0.5 * target,
+        "starts well away from the target"
+    );
+    let out = run_rows(&scene);
+    let speeds: Vec<f64> = out
+        .rows
+        .iter()
+        .map(|r| -r.ball_velocity_before_mps)
+        .collect();
+    let mut worst = 0.0f64;
+    for w in speeds.windows(2) {
+        worst = worst.max(rel(w[1], eq8(w[0], alpha, kappa1, g, target)));
+    }
+    println!(
+        "ideal juggler: {} impacts, worst eq. 8 relative error {worst:.2e}",
+        speeds.len()
+    );
+    assert!(worst <= 1e-10, "{worst}");
+    // and the fixed point of eq. 8 (v = v*) is reached: apex -> h*
+    let s = Summary::new(&scene, &out);
+    assert_eq!(s.period, Some(1));
+    // (linear rate |1 - 2 beta v*^2| = 0.77 per impact: 0.77^60 ~ 1e-7 of the initial error)
+    assert!(rel(*out.apexes_m.last().unwrap(), target) < 1e-5);
+}
+
+#[test]
+fn ideal_juggler_past_beta_v2_of_one_has_period_two() {
+    let (alpha, g, target) = (0.8, 9.81, 1.0);
+    // beta v*^2 = 1.05 > 1
+    let kappa1 = 2.0 * 1.05 / ((1.0 + alpha) * 2.0 * g * target);
+    let set = format!("control.kappa1_s2pm2={kappa1:e}");
+    let scene = load_scene("line-juggler-ideal", &[&set, "stop.impacts=400"]);
+    let out = run_rows(&scene);
+    let s = Summary::new(&scene, &out);
+    assert_eq!(
+        s.period,
+        Some(2),
+        "apexes end with {:?}",
+        &out.apexes_m[out.apexes_m.len() - 4..]
+    );
+    // the two impact speeds p, q of the cycle satisfy eq. 8 both ways, and differ
+    let n = out.rows.len();
+    let p = -out.rows[n - 2].ball_velocity_before_mps;
+    let q = -out.rows[n - 1].ball_velocity_before_mps;
+    assert!(rel(q, eq8(p, alpha, kappa1, g, target)) <= 1e-10);
+    assert!(
+        rel(p, eq8(q, alpha, kappa1, g, target)) <= 1e-8,
+        "2-cycle not closed"
+    );
+    assert!(rel(p, q) > 1e-3, "p = {p}, q = {q}: not a 2-cycle");
+    // the period-1 orbit v* lies between them (the cycle straddles the unstable fixed point)
+    let vstar = (2.0 * g * target).sqrt();
+    assert!((p - vstar) * (q - vstar) < 0.0);
+}
+
+#[test]
+fn realistic_line_juggler_converges_within_one_percent() {
+    let scene = load_scene("line-juggler", &[]);
+    assert!(scene
+        .sensor
+        .as_ref()
+        .is_some_and(|s| s.noise_sigma_m > 0.0 && s.latency_s > 0.0));
+    let out = run_rows(&scene);
+    let s = Summary::new(&scene, &out);
+    let n = s.converged_after_impacts.expect("converges");
+    println!(
+        "line-juggler.toml: converged after {n} impacts, final apex {:?}",
+        s.final_apex_m
+    );
+    let target = scene.control.target_apex_m.unwrap();
+    for a in &out.apexes_m[n as usize..] {
+        assert!(rel(*a, target) <= 0.01, "apex {a}");
+    }
+    assert!(
+        out.apexes_m.len() as u64 >= n + 20,
+        "converged for at least 20 impacts"
+    );
+    assert!(!s.resting_contact);
+}
+
+#[test]
+fn sweep_over_kappa1_period_doubles_where_beta_v2_passes_one() {
+    use dexter_sim::sweep::{sweep, Range};
+    let sets = [dexter_sim::scene::parse_set("stop.impacts=600").unwrap()];
+    let table = dexter_sim::scene::load_table(
+        &common::scenes_dir().join("line-juggler-chaotic.toml"),
+        &sets,
+    )
+    .unwrap();
+    // beta v*^2 = 0.9 * kappa1 * 19.62 crosses 1 at kappa1 = 0.05663
+    let range = Range::parse("control.kappa1_s2pm2=0.04:0.06:3").unwrap();
+    let points = sweep(&table, &range, 8).unwrap();
+    let distinct = |k: f64| {
+        let mut v: Vec<f64> = points
+            .iter()
+            .filter(|p| (p.0 - k).abs() < 1e-12)
+            .map(|p| p.1)
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+        v.len()
+    };
+    assert_eq!(distinct(0.04), 1, "beta v*^2 = 0.71: period 1");
+    assert_eq!(distinct(0.05), 1, "beta v*^2 = 0.88: period 1");
+    assert_eq!(distinct(0.06), 2, "beta v*^2 = 1.06: period 2");
+}

@@ -1,0 +1,155 @@
+//! Boots the firmware. The semihosting command line (QEMU `-append`) picks the mode:
+//! - nothing: the smoke run ([`dexter_firmware::smoke`]), what `cargo fw` shows;
+//! - `semihosting`: lock-step server on the semihosting file link;
+//! - `uart`: lock-step server on UART0;
+//! - `freerun`: free-running fixed-rate mode on UART0 (500 Hz on SysTick, link timeout
+//!   after 5 periods without a valid frame), the loop a real board runs;
+//! - `fault-panic`, `fault-hardfault`: test hooks that panic or execute `udf`, to check that
+//!   both end the QEMU run with a failure status;
+//! - `bench` (feature `bench`): per-call instruction counts of the math kernels.
+#![no_std]
+#![no_main]
+
+use cortex_m::peripheral::SYST;
+use cortex_m_rt::{entry, exception};
+use dexter_firmware::board::{mps2_an386, SysTickInstructions};
+use dexter_firmware::link::{command_line, LinkError, SemihostingLink};
+use dexter_firmware::server::{Exit, FreeRunning, Server};
+
+/// Control rate of the free-running mode, Hz.
+const FREE_RUNNING_RATE_HZ: u32 = 500;
+/// Periods without a valid sensor frame before the free-running mode's safe state.
+const FREE_RUNNING_TIMEOUT_PERIODS: u32 = 5;
+use dexter_firmware::{exit, smoke};
+
+/// The plant links this board offers, as one type so the server is compiled once.
+enum PlantLink {
+    Semihosting(SemihostingLink),
+    Uart(mps2_an386::Uart0),
+}
+
+impl embedded_io::ErrorType for PlantLink {
+    type Error = LinkError;
+}
+
+impl embedded_io::Read for PlantLink {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
+        match self {
+            PlantLink::Semihosting(l) => l.read(buf),
+            PlantLink::Uart(u) => u.read(buf).map_err(|e| match e {}),
+        }
+    }
+}
+
+impl embedded_io::ReadReady for PlantLink {
+    fn read_ready(&mut self) -> Result<bool, LinkError> {
+        match self {
+            PlantLink::Semihosting(l) => l.read_ready(),
+            PlantLink::Uart(u) => u.read_ready().map_err(|e| match e {}),
+        }
+    }
+}
+
+impl embedded_io::Write for PlantLink {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, LinkError> {
+        match self {
+            PlantLink::Semihosting(l) => l.write(buf),
+            PlantLink::Uart(u) => u.write(buf).map_err(|e| match e {}),
+        }
+    }
+
+    fn flush(&mut self) -> Result<(), LinkError> {
+        Ok(())
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, defmt::Format)]
+enum BootMode {
+    Smoke,
+    Semihosting,
+    Uart,
+    FreeRunning,
+    FaultPanic,
+    FaultHardFault,
+    Bench,
+}
+
+fn boot_mode() -> BootMode {
+    let mut buf = [0u8; 256];
+    let line = command_line(&mut buf);
+    let mut mode = BootMode::Smoke;
+    for word in line.split(|&b| b == b' ') {
+        match word {
+            b"semihosting" => mode = BootMode::Semihosting,
+            b"uart" => mode = BootMode::Uart,
+            b"freerun" => mode = BootMode::FreeRunning,
+            b"fault-panic" => mode = BootMode::FaultPanic,
+            b"fault-hardfault" => mode = BootMode::FaultHardFault,
+            b"bench" => mode = BootMode::Bench,
+            _ => {}
+        }
+    }
+    mode
+}
+
+#[entry]
+fn main() -> ! {
+    let Some(mut cp) = cortex_m::Peripherals::take() else {
+        exit(false)
+    };
+    let timer = SysTickInstructions::new(cp.SYST);
+    let mode = boot_mode();
+    defmt::info!(
+        "dexter-firmware {=str} on mps2-an386: {}",
+        env!("CARGO_PKG_VERSION"),
+        mode
+    );
+    let exit_of = |e: Exit, stats: dexter_firmware::server::RunStats| -> ! {
+        defmt::info!("link ended: {} after {=u32} steps", e, stats.steps);
+        exit(e != Exit::LinkFailed)
+    };
+    match mode {
+        BootMode::Smoke => exit(smoke::run(&timer)),
+        BootMode::Semihosting | BootMode::Uart => {
+            let link = if mode == BootMode::Uart {
+                PlantLink::Uart(mps2_an386::Uart0::new(&mut cp.NVIC))
+            } else {
+                let Ok(link) = SemihostingLink::open() else {
+                    defmt::error!("cannot open the semihosting link files");
+                    exit(false)
+                };
+                PlantLink::Semihosting(link)
+            };
+            let mut server = Server::new(link, timer);
+            let e = server.run();
+            exit_of(e, server.stats())
+        }
+        BootMode::FreeRunning => {
+            let uart = PlantLink::Uart(mps2_an386::Uart0::new(&mut cp.NVIC));
+            let mut server = Server::new(uart, timer);
+            let mode = FreeRunning {
+                period_ticks: mps2_an386::SYSTICK_HZ / FREE_RUNNING_RATE_HZ,
+                timeout_periods: FREE_RUNNING_TIMEOUT_PERIODS,
+            };
+            let e = mode.run(&mut server, SYST::get_current);
+            exit_of(e, server.stats())
+        }
+        BootMode::FaultPanic => panic!("fault-panic test hook"),
+        BootMode::FaultHardFault => cortex_m::asm::udf(),
+        BootMode::Bench => {
+            #[cfg(feature = "bench")]
+            exit(dexter_firmware::bench::run(&timer));
+            #[cfg(not(feature = "bench"))]
+            {
+                defmt::error!("built without the `bench` feature");
+                exit(false)
+            }
+        }
+    }
+}
+
+/// Device interrupts (cortex-m-rt without a device crate routes them all here).
+#[exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    mps2_an386::on_interrupt(irqn);
+}

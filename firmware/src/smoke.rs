@@ -1,0 +1,117 @@
+//! The smoke run `cargo fw` boots when no host drives a link: it checks the SysTick
+//! instruction ratio with a known instruction sequence, then closes the loop around the
+//! core for a short, deterministic ball drop on the target and logs what happened. Its
+//! output (decoded defmt) is checked in as `firmware/expected/smoke.txt`.
+
+use crate::board::{StepTimer, SysTickInstructions};
+use cortex_m::peripheral::SYST;
+use dexter_core::control::{Controller, ControllerParams};
+use dexter_core::protocol::{Mode, SensorFrame};
+
+/// Control steps of the smoke run (0.6 s at 500 Hz: the ball falls, is hit once, rises).
+pub const SMOKE_STEPS: u32 = 300;
+
+/// SysTick ticks for a straight run of `N` `nop`s, measured against the same window with
+/// no `nop`s.
+fn nop_ticks() -> (u32, u32) {
+    let t0 = SYST::get_current();
+    // Safety: no operands, no memory, no flags.
+    unsafe { core::arch::asm!("", options(nomem, nostack, preserves_flags)) };
+    let t1 = SYST::get_current();
+    unsafe {
+        core::arch::asm!(
+            ".rept 1000",
+            "nop",
+            ".endr",
+            options(nomem, nostack, preserves_flags)
+        )
+    };
+    let t2 = SYST::get_current();
+    (
+        SysTickInstructions::ticks(t0, t1),
+        SysTickInstructions::ticks(t1, t2),
+    )
+}
+
+/// Run the smoke test; returns whether every check held.
+pub fn run(timer: &SysTickInstructions) -> bool {
+    let (empty, thousand) = nop_ticks();
+    let per_1000 = thousand - empty;
+    defmt::info!(
+        "systick: 1000 nops = {=u32} ticks over an empty window (25.6 ticks per instruction expected)",
+        per_1000
+    );
+    defmt::info!(
+        "measurement overhead: {=u32} instructions (subtracted)",
+        timer.overhead()
+    );
+    // SysTick rounds to whole ticks at each read: allow one tick over 1000 instructions.
+    let ratio_ok = per_1000.abs_diff(25_600) <= 1;
+
+    let params = ControllerParams::default();
+    let Ok(mut controller) = Controller::new(params) else {
+        defmt::error!("default parameters rejected");
+        return false;
+    };
+    // Exact plant in f32: ball in free flight from 0.6 m, paddle a double integrator
+    // driven by the command; an impact reverses the relative velocity with restitution.
+    let dt = params.dt_s;
+    let g = params.gravity_mps2;
+    let e = params.estimator.restitution;
+    let (mut b, mut vb) = (0.6f32, 0.0f32);
+    let (mut p, mut vp) = (params.home_height_m, 0.0f32);
+    let mut mode = Mode::Safe;
+    let (mut min, mut max, mut sum) = (u32::MAX, 0u32, 0u32);
+    let mut impacts = 0u32;
+    let mut apex = 0.0f32;
+    for seq in 0..SMOKE_STEPS {
+        let frame = SensorFrame {
+            seq,
+            ball_height_m: b,
+            paddle_height_m: p,
+            paddle_velocity_mps: vp,
+        };
+        let (cmd, instr) = timer.measure(|| controller.step(&frame));
+        min = min.min(instr);
+        max = max.max(instr);
+        sum = sum.saturating_add(instr);
+        if cmd.mode != mode {
+            defmt::info!("step {=u32}: mode {} (fault {})", seq, cmd.mode, cmd.fault);
+            mode = cmd.mode;
+        }
+        let u = cmd.paddle_accel_mps2;
+        b += vb * dt - 0.5 * g * dt * dt;
+        vb -= g * dt;
+        p += vp * dt + 0.5 * u * dt * dt;
+        vp += u * dt;
+        if b <= p && vb < vp {
+            vb = vp + e * (vp - vb);
+            b = p;
+            impacts += 1;
+            defmt::info!("step {=u32}: impact, ball leaves at {=f32} m/s", seq, vb);
+        }
+        if impacts > 0 && vb > 0.0 {
+            apex = apex.max(b + vb * vb / (2.0 * g));
+        }
+    }
+    let mean = sum / SMOKE_STEPS;
+    defmt::info!(
+        "{=u32} steps, {=u32} impacts, predicted apex {=f32} m",
+        SMOKE_STEPS,
+        impacts,
+        apex
+    );
+    defmt::info!(
+        "instructions per step: min {=u32} mean {=u32} max {=u32}",
+        min,
+        mean,
+        max
+    );
+    let ok = ratio_ok && impacts >= 1 && mode == Mode::Track;
+    if ok {
+        defmt::info!("smoke run passed");
+    } else {
+        defmt::error!("smoke run failed");
+    }
+    ok
+}

@@ -1,0 +1,234 @@
+//! The line juggler's plant: a ball on a vertical line over a surface, advanced from event
+//! to event with only the effects it was assembled with.
+
+use super::surface::Surface;
+use crate::effects::jitter::Jitter;
+use crate::engine::zeno::{remaining_time_s, ZenoPolicy};
+use crate::engine::{Flight, FlightEnd};
+use crate::trace::ImpactRow;
+use dexter_core::state::{restitution_velocity, BallState};
+
+/// Most flight segments in one [`LinePlant::advance_to`] call (a safety cap: a segment ends
+/// at an impact, an actuator limit, or the requested time).
+pub const MAX_SEGMENTS_PER_CALL: u32 = 1_000_000;
+
+/// Why [`LinePlant::advance_to`] returned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Advance {
+    /// The requested time was reached.
+    Reached,
+    /// The requested number of impacts was reached (the time is that of the last impact).
+    ImpactLimit,
+    /// The ball rests on a surface that will never throw it again.
+    RestForever,
+    /// A safety cap on segments was hit before the requested time (the caller may continue).
+    SegmentCap,
+}
+
+/// A resting-contact episode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RestEvent {
+    /// Time the ball came to rest on the paddle, s (the Zeno limit time if it was summed).
+    pub time_s: f64,
+    /// Impacts before the contact began.
+    pub after_impacts: u64,
+    /// True if the rest was forced by the per-segment impact cap rather than detected.
+    pub forced: bool,
+}
+
+/// The plant: gravity, restitution, a flight model, a surface, and impact jitter.
+#[derive(Clone, Debug)]
+pub struct LinePlant<F, S, J> {
+    /// Gravity, m/s^2.
+    pub gravity_mps2: f64,
+    /// Restitution, dimensionless.
+    pub restitution: f64,
+    /// The flight model.
+    pub flight: F,
+    /// The surface.
+    pub surface: S,
+    /// Impact-timing jitter.
+    pub jitter: J,
+    /// Zeno policy.
+    pub zeno: ZenoPolicy,
+    /// Time now, s.
+    pub time_s: f64,
+    /// Ball state now.
+    pub ball: BallState<f64>,
+    /// True while the ball rests on the paddle.
+    pub resting: bool,
+    /// Impacts so far.
+    pub impacts: u64,
+    /// Resting-contact episodes so far (bounded list: the first 64).
+    pub rests: Vec<RestEvent>,
+    /// Resting-contact episodes in total.
+    pub rest_count: u64,
+    /// Grazing contacts (zero relative speed) so far.
+    pub grazing_contacts: u64,
+}
+
+/// Rest events kept in [`LinePlant::rests`].
+const MAX_REST_EVENTS: usize = 64;
+
+impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
+    /// A plant at t = 0 with `ball`.
+    pub fn new(
+        gravity_mps2: f64,
+        restitution: f64,
+        flight: F,
+        surface: S,
+        jitter: J,
+        zeno: ZenoPolicy,
+        ball: BallState<f64>,
+    ) -> Self {
+        Self {
+            gravity_mps2,
+            restitution,
+            flight,
+            surface,
+            jitter,
+            zeno,
+            time_s: 0.0,
+            ball,
+            resting: false,
+            impacts: 0,
+            rests: Vec::new(),
+            rest_count: 0,
+            grazing_contacts: 0,
+        }
+    }
+
+    fn come_to_rest(&mut self, time_s: f64, forced: bool) {
+        self.resting = true;
+        self.rest_count += 1;
+        if self.rests.len() < MAX_REST_EVENTS {
+            self.rests.push(RestEvent {
+                time_s,
+                after_impacts: self.impacts,
+                forced,
+            });
+        }
+    }
+
+    /// Advance to `t_end_s` (s), stopping early once `max_impacts` impacts have happened in
+    /// total; each impact is passed to `on_impact`.
+    pub fn advance_to(
+        &mut self,
+        t_end_s: f64,
+        max_impacts: u64,
+        on_impact: &mut impl FnMut(&ImpactRow),
+    ) -> Advance {
+        let g = self.gravity_mps2;
+        let mut segment_impacts = 0u32;
+        for _ in 0..MAX_SEGMENTS_PER_CALL {
+            let window = t_end_s - self.time_s;
+            if window <= 0.0 {
+                return Advance::Reached;
+            }
+            let to_switch = self.surface.max_segment_s();
+            let (h, hits_switch) = if to_switch < window {
+                (to_switch, true)
+            } else {
+                (window, false)
+            };
+            if self.resting {
+                if self.surface.rest_is_final() {
+                    return Advance::RestForever;
+                }
+                if self.surface.poly().accel_mps2 >= -g {
+                    // the ball rides on the paddle
+                    self.surface.advance(h, hits_switch);
+                    let p = self.surface.state(&self.ball);
+                    self.ball = BallState::new(p.height_m, p.velocity_mps);
+                    self.time_s = if hits_switch {
+                        self.time_s + h
+                    } else {
+                        t_end_s
+                    };
+                    continue;
+                }
+                // the paddle accelerates down faster than gravity: the ball leaves it
+                self.resting = false;
+            }
+            let poly = self.surface.poly();
+            match self.flight.fly(&mut self.ball, &poly, h, g) {
+                FlightEnd::Reached(dt) => {
+                    let whole = dt >= h;
+                    self.surface.advance(dt, whole && hits_switch);
+                    self.time_s = if whole && !hits_switch {
+                        t_end_s
+                    } else {
+                        self.time_s + dt
+                    };
+                }
+                FlightEnd::Contact { dt_s, grazing } => {
+                    self.surface.advance(dt_s, false);
+                    self.time_s += dt_s;
+                    if grazing {
+                        self.grazing_contacts += 1;
+                    }
+                    self.impact(on_impact);
+                    segment_impacts += 1;
+                    if !self.resting
+                        && !self.surface.rest_is_final()
+                        && segment_impacts >= self.zeno.max_impacts_per_segment
+                    {
+                        let t = self.time_s;
+                        self.stick();
+                        self.come_to_rest(t, true);
+                    }
+                    if self.impacts >= max_impacts {
+                        return Advance::ImpactLimit;
+                    }
+                }
+            }
+        }
+        Advance::SegmentCap
+    }
+
+    /// Put the ball on the paddle, moving with it.
+    fn stick(&mut self) {
+        let p = self.surface.state(&self.ball);
+        self.ball = BallState::new(p.height_m, p.velocity_mps);
+    }
+
+    /// The restitution law at a contact, then the Zeno check.
+    fn impact(&mut self, on_impact: &mut impl FnMut(&ImpactRow)) {
+        let g = self.gravity_mps2;
+        let e = self.restitution;
+        let before = self.ball;
+        let (rv, ra) = self.surface.at_impact(&before, g);
+        let rv = rv + ra * self.jitter.offset_s();
+        let paddle = self.surface.state(&before);
+        let v_after = restitution_velocity(before.velocity_mps, rv, e);
+        // the ball is on the paddle surface at a contact: remove rounding in the height
+        self.ball = BallState::new(paddle.height_m, v_after);
+        let relative = v_after - rv;
+        let row = ImpactRow {
+            index: self.impacts,
+            time_s: self.time_s,
+            ball_height_m: paddle.height_m,
+            ball_velocity_before_mps: before.velocity_mps,
+            ball_velocity_after_mps: v_after,
+            paddle_height_m: paddle.height_m,
+            paddle_velocity_mps: rv,
+            apex_height_m: self.flight.apex_m(&self.ball, g),
+        };
+        self.impacts += 1;
+        on_impact(&row);
+        if self.zeno.is_zeno(relative, rv) {
+            // the bounces that follow are a geometric series: sum them in closed form
+            // against the surface's current acceleration, then rest on the paddle
+            let g_eff = g + self.surface.poly().accel_mps2;
+            let rest_time = match remaining_time_s(relative.max(0.0), g_eff, e) {
+                Some(dt) if self.surface.rest_is_final() => self.time_s + dt,
+                _ => self.time_s,
+            };
+            if self.surface.rest_is_final() {
+                self.time_s = rest_time;
+            }
+            self.stick();
+            self.come_to_rest(rest_time, false);
+        }
+    }
+}

@@ -1,0 +1,164 @@
+//! What the ball hits: a fixed table, the paper's ideal mirror paddle, or an actuated
+//! paddle driven by a controller's acceleration commands.
+
+use crate::effects::actuator::Actuator;
+use crate::engine::Poly;
+use dexter_core::mirror::MirrorLaw;
+use dexter_core::state::{BallState, PaddleState};
+
+/// The surface the ball bounces on.
+pub trait Surface {
+    /// The surface over the coming segment as a quadratic in local time (for contact roots).
+    fn poly(&self) -> Poly;
+    /// How long [`poly`](Surface::poly) stays valid on its own (until a limit switches the
+    /// regime), s.
+    fn max_segment_s(&self) -> f64;
+    /// Move along the current polynomial by `dt_s`; `to_switch` if that reaches the end of
+    /// [`max_segment_s`](Surface::max_segment_s).
+    fn advance(&mut self, dt_s: f64, to_switch: bool);
+    /// Paddle velocity (m/s) and acceleration (m/s^2) the restitution law sees at a
+    /// contact with `ball` (the state just before the impact).
+    fn at_impact(&self, ball: &BallState<f64>, g: f64) -> (f64, f64);
+    /// The paddle state for reports, given the ball state.
+    fn state(&self, ball: &BallState<f64>) -> PaddleState<f64>;
+    /// Apply a new acceleration command, m/s^2 (ignored by surfaces that are not driven).
+    fn command(&mut self, accel_mps2: f64);
+    /// True if a ball resting on this surface rests forever (nothing will throw it).
+    fn rest_is_final(&self) -> bool;
+}
+
+/// A fixed, horizontal table.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Table {
+    /// Table height, m.
+    pub height_m: f64,
+}
+
+impl Surface for Table {
+    #[inline]
+    fn poly(&self) -> Poly {
+        Poly {
+            height_m: self.height_m,
+            velocity_mps: 0.0,
+            accel_mps2: 0.0,
+        }
+    }
+    #[inline]
+    fn max_segment_s(&self) -> f64 {
+        f64::INFINITY
+    }
+    #[inline]
+    fn advance(&mut self, _: f64, _: bool) {}
+    #[inline]
+    fn at_impact(&self, _: &BallState<f64>, _: f64) -> (f64, f64) {
+        (0.0, 0.0)
+    }
+    fn state(&self, _: &BallState<f64>) -> PaddleState<f64> {
+        PaddleState::new(self.height_m, 0.0)
+    }
+    fn command(&mut self, _: f64) {}
+    fn rest_is_final(&self) -> bool {
+        true
+    }
+}
+
+/// The gedanken juggler's paddle (Rizzi & Koditschek sec. 2.1): r = -k(w) b exactly and
+/// continuously, from the true ball state, f64. With k < 1 the ball and paddle meet only
+/// at b = 0, where r = 0 and r' = -k b' (eq. 6), so for contact purposes the surface is
+/// the plane b = 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IdealMirror {
+    /// The mirror law (f64).
+    pub law: MirrorLaw<f64>,
+}
+
+impl Surface for IdealMirror {
+    #[inline]
+    fn poly(&self) -> Poly {
+        Poly::default()
+    }
+    #[inline]
+    fn max_segment_s(&self) -> f64 {
+        f64::INFINITY
+    }
+    #[inline]
+    fn advance(&mut self, _: f64, _: bool) {}
+    #[inline]
+    fn at_impact(&self, ball: &BallState<f64>, _: f64) -> (f64, f64) {
+        let r = self.law.reference(ball);
+        (r.velocity_mps, r.accel_mps2)
+    }
+    fn state(&self, ball: &BallState<f64>) -> PaddleState<f64> {
+        let r = self.law.reference(ball);
+        PaddleState::new(r.height_m, r.velocity_mps)
+    }
+    fn command(&mut self, _: f64) {}
+    fn rest_is_final(&self) -> bool {
+        // a ball at rest on b = 0 has r = r' = 0: the law never throws it again
+        true
+    }
+}
+
+/// A paddle driven by acceleration commands through an actuator model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Actuated<A> {
+    /// The actuator model.
+    pub actuator: A,
+    /// Paddle state now.
+    pub paddle: PaddleState<f64>,
+    /// The last command, m/s^2.
+    pub command_mps2: f64,
+    /// The acceleration the paddle has now, m/s^2.
+    pub accel_mps2: f64,
+}
+
+impl<A: Actuator> Actuated<A> {
+    /// A paddle at rest at `height_m`.
+    pub fn new(actuator: A, height_m: f64) -> Self {
+        Self {
+            actuator,
+            paddle: PaddleState::new(height_m, 0.0),
+            command_mps2: 0.0,
+            accel_mps2: 0.0,
+        }
+    }
+}
+
+impl<A: Actuator> Surface for Actuated<A> {
+    #[inline]
+    fn poly(&self) -> Poly {
+        Poly {
+            height_m: self.paddle.height_m,
+            velocity_mps: self.paddle.velocity_mps,
+            accel_mps2: self.accel_mps2,
+        }
+    }
+    #[inline]
+    fn max_segment_s(&self) -> f64 {
+        self.actuator.time_to_switch(&self.paddle, self.accel_mps2)
+    }
+    #[inline]
+    fn advance(&mut self, dt: f64, to_switch: bool) {
+        let a = self.accel_mps2;
+        self.paddle.height_m += dt * (self.paddle.velocity_mps + 0.5 * a * dt);
+        self.paddle.velocity_mps += a * dt;
+        if to_switch {
+            self.actuator.settle(&mut self.paddle);
+            self.accel_mps2 = self.actuator.accel(&self.paddle, self.command_mps2);
+        }
+    }
+    #[inline]
+    fn at_impact(&self, _: &BallState<f64>, _: f64) -> (f64, f64) {
+        (self.paddle.velocity_mps, self.accel_mps2)
+    }
+    fn state(&self, _: &BallState<f64>) -> PaddleState<f64> {
+        self.paddle
+    }
+    fn command(&mut self, accel_mps2: f64) {
+        self.command_mps2 = accel_mps2;
+        self.accel_mps2 = self.actuator.accel(&self.paddle, accel_mps2);
+    }
+    fn rest_is_final(&self) -> bool {
+        false
+    }
+}

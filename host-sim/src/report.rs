@@ -1,0 +1,185 @@
+//! Run summaries: convergence to the target apex, the detected period, resting contact,
+//! timing; as human-readable text or one JSON object.
+
+use crate::controller::HilReport;
+use crate::run::RunOutcome;
+use crate::scene::{ControlMode, Scene};
+use serde::Serialize;
+
+/// Fewest trailing in-band apexes for a run to count as converged.
+pub const MIN_CONVERGED_TAIL: usize = 5;
+
+/// The summary of one run (the `--json` object).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// Scene name.
+    pub scene: String,
+    /// Impacts simulated.
+    pub impacts: u64,
+    /// Control steps taken (0 without a controller).
+    pub control_steps: u64,
+    /// Simulated time, s.
+    pub sim_time_s: f64,
+    /// Wall-clock time, s.
+    pub wall_time_s: f64,
+    /// Target apex h*, m (null for a passive scene).
+    pub target_apex_m: Option<f64>,
+    /// Apex after the last impact, m (null without impacts).
+    pub final_apex_m: Option<f64>,
+    /// Impacts after which every apex stayed within `analysis.converge_tolerance` of the
+    /// target (null if it never settled there, or did for fewer than 5 impacts).
+    pub converged_after_impacts: Option<u64>,
+    /// Period of the apex sequence at the end, impacts (null if none found or resting).
+    pub period: Option<u32>,
+    /// True if the ball came to resting contact (a Zeno sequence) at any time.
+    pub resting_contact: bool,
+    /// Time the first resting contact began, s (the Zeno limit for a fixed table).
+    pub resting_since_s: Option<f64>,
+    /// Impacts before the first resting contact.
+    pub resting_after_impacts: Option<u64>,
+    /// Grazing contacts (zero relative speed).
+    pub grazing_contacts: u64,
+    /// HIL figures (only with `--hil`).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub hil: Option<HilReport>,
+}
+
+/// Impacts after which all apexes stay within `tol` (relative) of `target`; None if the
+/// in-band tail is shorter than [`MIN_CONVERGED_TAIL`].
+pub fn converged_after(apexes: &[f64], target: f64, tol: f64) -> Option<u64> {
+    let band = tol * target.abs();
+    let tail = apexes
+        .iter()
+        .rev()
+        .take_while(|a| (*a - target).abs() <= band)
+        .count();
+    if tail >= MIN_CONVERGED_TAIL {
+        Some((apexes.len() - tail) as u64 + 1)
+    } else {
+        None
+    }
+}
+
+/// The smallest period p <= `max_period` such that the last `4 p` apexes each equal the one
+/// p before within `tol` (relative); needs `5 p` apexes.
+pub fn detect_period(apexes: &[f64], max_period: u32, tol: f64) -> Option<u32> {
+    let n = apexes.len();
+    (1..=max_period).find(|&p| {
+        let p = p as usize;
+        n >= 5 * p
+            && (n - 4 * p..n).all(|i| {
+                let (a, b) = (apexes[i], apexes[i - p]);
+                (a - b).abs() <= tol * a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
+            })
+    })
+}
+
+impl Summary {
+    /// Summarise `out`, a run of `scene`.
+    pub fn new(scene: &Scene, out: &RunOutcome) -> Self {
+        let target = (scene.control.mode != ControlMode::None)
+            .then_some(scene.control.target_apex_m)
+            .flatten();
+        let an = &scene.analysis;
+        let first_rest = out.rests.first();
+        Self {
+            scene: scene.name().to_string(),
+            impacts: out.impacts,
+            control_steps: out.control_steps,
+            sim_time_s: out.sim_time_s,
+            wall_time_s: out.wall_time_s,
+            target_apex_m: target,
+            final_apex_m: out.apexes_m.last().copied(),
+            converged_after_impacts: target
+                .and_then(|t| converged_after(&out.apexes_m, t, an.converge_tolerance)),
+            period: if out.resting_at_end {
+                None
+            } else {
+                detect_period(&out.apexes_m, an.max_period, an.period_tolerance)
+            },
+            resting_contact: out.rest_count > 0,
+            resting_since_s: first_rest.map(|r| r.time_s),
+            resting_after_impacts: first_rest.map(|r| r.after_impacts),
+            grazing_contacts: out.grazing_contacts,
+            hil: out.hil,
+        }
+    }
+
+    /// One JSON object.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+
+    /// Human-readable summary.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.6} m"));
+        s += &format!("scene            {}\n", self.scene);
+        s += &format!("target apex      {}\n", opt(self.target_apex_m));
+        s += &format!("final apex       {}\n", opt(self.final_apex_m));
+        s += &format!(
+            "converged (1 %)  {}\n",
+            match (self.target_apex_m, self.converged_after_impacts) {
+                (None, _) => "- (no target)".to_string(),
+                (_, Some(n)) => format!("after {n} impacts"),
+                (_, None) => "never".to_string(),
+            }
+        );
+        s += &format!(
+            "period           {}\n",
+            self.period
+                .map_or("none detected".to_string(), |p| p.to_string())
+        );
+        s += &format!(
+            "resting contact  {}\n",
+            match (self.resting_since_s, self.resting_after_impacts) {
+                (Some(t), Some(n)) => format!("yes, from t = {t:.9} s after {n} impacts (Zeno)"),
+                _ => "no".to_string(),
+            }
+        );
+        s += &format!("impacts          {}\n", self.impacts);
+        if self.control_steps > 0 {
+            s += &format!("control steps    {}\n", self.control_steps);
+        }
+        s += &format!("sim time         {:.6} s\n", self.sim_time_s);
+        s += &format!("wall time        {:.6} s\n", self.wall_time_s);
+        if let Some(h) = &self.hil {
+            s += &format!(
+                "HIL              {} mismatches, {} link errors, {} timeouts, {} over budget, steps/s {:.0}, instr min/mean/max {}/{:.1}/{}\n",
+                h.sil_mismatches,
+                h.link_errors,
+                h.link_timeouts,
+                h.over_budget_steps,
+                h.steps_per_wall_second,
+                h.step_instructions_min,
+                h.step_instructions_mean,
+                h.step_instructions_max
+            );
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn convergence_counts_impacts_before_the_final_band() {
+        let a = [0.5, 0.8, 0.95, 1.005, 0.998, 1.0, 1.001, 0.999];
+        assert_eq!(converged_after(&a, 1.0, 0.01), Some(4));
+        assert_eq!(converged_after(&a[..6], 1.0, 0.01), None); // tail of 3 only
+        assert_eq!(converged_after(&[0.5; 20], 1.0, 0.01), None);
+    }
+
+    #[test]
+    fn period_two_is_found_and_period_one_preferred() {
+        let p2: Vec<f64> = (0..20)
+            .map(|i| if i % 2 == 0 { 1.2 } else { 0.7 })
+            .collect();
+        assert_eq!(detect_period(&p2, 8, 1e-6), Some(2));
+        assert_eq!(detect_period(&[1.0; 10], 8, 1e-6), Some(1));
+        let chaos: Vec<f64> = (0..50).map(|i| (i as f64 * 1.7).sin()).collect();
+        assert_eq!(detect_period(&chaos, 8, 1e-6), None);
+    }
+}

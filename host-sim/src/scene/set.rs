@@ -1,0 +1,80 @@
+//! `--set key.path=value` overrides, applied to the parsed TOML before deserialization so
+//! they pass the same unknown-key and type checks as the file.
+
+use super::SceneError;
+
+/// Parse `key.path=value`: the value is read as a TOML value (`0.5`, `true`, `"rk45"`),
+/// and taken as a bare string if it is not one (`rk45`).
+pub fn parse_set(arg: &str) -> Result<(String, toml::Value), SceneError> {
+    let (key, raw) = arg
+        .split_once('=')
+        .ok_or_else(|| SceneError::new(arg, "expected key.path=value"))?;
+    let key = key.trim();
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        return Err(SceneError::new(key, "empty key path segment"));
+    }
+    let raw = raw.trim();
+    let value = match format!("v = {raw}").parse::<toml::Table>() {
+        Ok(mut t) => t
+            .remove("v")
+            .unwrap_or_else(|| toml::Value::String(raw.to_string())),
+        Err(_) => toml::Value::String(raw.to_string()),
+    };
+    Ok((key.to_string(), value))
+}
+
+/// Set `key` (dotted) to `value` in `table`, creating intermediate tables.
+pub fn apply_set(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), SceneError> {
+    let mut parts: Vec<&str> = key.split('.').collect();
+    let last = parts
+        .pop()
+        .ok_or_else(|| SceneError::new(key, "empty key"))?;
+    let mut cur = table;
+    let mut walked = String::new();
+    for p in parts {
+        if !walked.is_empty() {
+            walked.push('.');
+        }
+        walked.push_str(p);
+        let entry = cur
+            .entry(p.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        cur = match entry {
+            toml::Value::Table(t) => t,
+            _ => {
+                return Err(SceneError::new(
+                    walked,
+                    "is not a table, cannot set a key inside it",
+                ))
+            }
+        };
+    }
+    cur.insert(last.to_string(), value);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_are_typed_and_bare_words_are_strings() {
+        assert_eq!(parse_set("a.b=0.5").unwrap().1, toml::Value::Float(0.5));
+        assert_eq!(parse_set("a=3").unwrap().1, toml::Value::Integer(3));
+        assert_eq!(
+            parse_set("a=rk45").unwrap().1,
+            toml::Value::String("rk45".into())
+        );
+        assert!(parse_set("novalue").is_err());
+        assert!(parse_set("a..b=1").is_err());
+    }
+
+    #[test]
+    fn nested_tables_are_created_and_scalars_are_not_walked_through() {
+        let mut t = toml::Table::new();
+        apply_set(&mut t, "x.y.z", toml::Value::Integer(1)).unwrap();
+        assert_eq!(t["x"]["y"]["z"].as_integer(), Some(1));
+        let err = apply_set(&mut t, "x.y.z.w", toml::Value::Integer(1)).unwrap_err();
+        assert_eq!(err.key, "x.y.z");
+    }
+}
