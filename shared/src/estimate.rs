@@ -381,8 +381,16 @@ mod tests {
         }
         let first_up = first_up.expect("the estimate never saw the bounce");
         // the estimate turns upward at the first sample at or after the true impact
-        assert!(first_up >= t_hit - 1e-9, "impact predicted {:.4} s early", t_hit - first_up);
-        assert!(first_up < t_hit + dt + 1e-9, "impact predicted {:.4} s late", first_up - t_hit);
+        assert!(
+            first_up >= t_hit - 1e-9,
+            "impact predicted {:.4} s early",
+            t_hit - first_up
+        );
+        assert!(
+            first_up < t_hit + dt + 1e-9,
+            "impact predicted {:.4} s late",
+            first_up - t_hit
+        );
     }
 
     #[test]
