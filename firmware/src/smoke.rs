@@ -37,16 +37,19 @@ fn nop_ticks() -> (u32, u32) {
 pub fn run(timer: &SysTickInstructions) -> bool {
     let (empty, thousand) = nop_ticks();
     let per_1000 = thousand - empty;
+    // The raw tick count varies by a tick or two from boot to boot (each SysTick read
+    // rounds), so the golden output shows it converted to whole instructions.
     defmt::info!(
-        "systick: 1000 nops = {=u32} ticks over an empty window (25.6 ticks per instruction expected)",
-        per_1000
+        "systick: 1000 nops = {=u32} instructions at 25.6 ticks each",
+        (per_1000 * 5 + 64) / 128
     );
     defmt::info!(
         "measurement overhead: {=u32} instructions (subtracted)",
         timer.overhead()
     );
-    // SysTick rounds to whole ticks at each read: allow one tick over 1000 instructions.
-    let ratio_ok = per_1000.abs_diff(25_600) <= 1;
+    // SysTick rounds to whole ticks at each of the four reads: allow two ticks over 1000
+    // instructions (0.08 of an instruction).
+    let ratio_ok = per_1000.abs_diff(25_600) <= 2;
 
     let params = ControllerParams::default();
     let Ok(mut controller) = Controller::new(params) else {
