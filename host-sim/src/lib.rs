@@ -16,6 +16,7 @@
 //! | [`trace`] | one row per impact, CSV |
 #![warn(missing_docs)]
 
+pub mod apps;
 pub mod controller;
 pub mod effects;
 pub mod engine;

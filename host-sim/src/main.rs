@@ -1,6 +1,7 @@
 //! `dexter`: run scenes, sweep parameters, write traces and plots.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use dexter_sim::apps::{self, AppAnalyze, AppError, AppRun, AppSweep, Kind};
 use dexter_sim::controller::StepController;
 use dexter_sim::report::Summary;
 use dexter_sim::run::{run_scene, RunOptions, RunOutcome};
@@ -33,6 +34,20 @@ enum Command {
     Run(RunArgs),
     /// Run a scene over a range of one key and collect late apexes (bifurcation diagram).
     Sweep(SweepArgs),
+    /// Linearize a scene's impact-to-impact map at its fixed point: eigenvalues, verdict.
+    Analyze(AnalyzeArgs),
+}
+
+#[derive(Args)]
+struct AnalyzeArgs {
+    /// The scene file (TOML).
+    scene: PathBuf,
+    /// Override a scene key: key.path=value (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Print one JSON object instead of the human report.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -161,6 +176,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Run(args)) => cmd_run(args),
         Some(Command::Sweep(args)) => cmd_sweep(args),
+        Some(Command::Analyze(args)) => cmd_analyze(args),
         None => {
             let root = workspace_root();
             cmd_run(RunArgs {
@@ -188,7 +204,55 @@ fn main() -> ExitCode {
     }
 }
 
+fn app_failure(e: AppError) -> Failure {
+    match e {
+        AppError::Scene(m) => Failure {
+            code: EXIT_SCENE,
+            message: format!("bad scene: {m}"),
+        },
+        AppError::Run(m) => run_failure(m),
+    }
+}
+
+fn cmd_analyze(args: AnalyzeArgs) -> Result<(), Failure> {
+    let app = AppAnalyze {
+        scene: args.scene.clone(),
+        sets: args.set.clone(),
+        json: args.json,
+    };
+    match apps::kind_of(&args.scene).map_err(app_failure)? {
+        Kind::Hopper => apps::hopper::analyze(&app).map_err(app_failure),
+        Kind::Planar => apps::planar::analyze(&app).map_err(app_failure),
+        Kind::Line => Err(Failure {
+            code: EXIT_SCENE,
+            message: "analyze takes a planar or hopper scene (a [planar] or [hopper] table)".into(),
+        }),
+    }
+}
+
 fn cmd_run(args: RunArgs) -> Result<(), Failure> {
+    let kind = apps::kind_of(&args.scene).map_err(app_failure)?;
+    if kind != Kind::Line {
+        if args.hil || args.duration.is_some() {
+            return Err(Failure {
+                code: EXIT_SCENE,
+                message: "--hil and --duration apply to line scenes only".into(),
+            });
+        }
+        let app = AppRun {
+            scene: args.scene.clone(),
+            sets: args.set.clone(),
+            impacts: args.impacts,
+            json: args.json,
+            plot: args.plot.clone(),
+            trace: args.trace.clone(),
+        };
+        return match kind {
+            Kind::Hopper => apps::hopper::run(&app),
+            _ => apps::planar::run(&app),
+        }
+        .map_err(app_failure);
+    }
     let mut sets = args.set.clone();
     if let Some(n) = args.impacts {
         sets.push(format!("stop.impacts={n}"));
@@ -337,6 +401,22 @@ fn param_label(key: &str) -> String {
 }
 
 fn cmd_sweep(args: SweepArgs) -> Result<(), Failure> {
+    let kind = apps::kind_of(&args.scene).map_err(app_failure)?;
+    if kind != Kind::Line {
+        let app = AppSweep {
+            scene: args.scene.clone(),
+            sets: args.set.clone(),
+            range: args.range.clone(),
+            keep: args.keep,
+            csv: args.csv.clone(),
+            plot: args.plot.clone(),
+        };
+        return match kind {
+            Kind::Hopper => apps::hopper::sweep(&app),
+            _ => apps::planar::sweep(&app),
+        }
+        .map_err(app_failure);
+    }
     let range = Range::parse(&args.range)?;
     let table = load_table(&args.scene, &args.set)?;
     // validate the base scene once so a bad file fails before the sweep starts

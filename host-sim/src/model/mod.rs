@@ -6,4 +6,5 @@
 
 pub mod hopper;
 pub mod line;
+pub mod planar;
 pub mod surface;
