@@ -105,6 +105,68 @@ impl std::error::Error for PlotError {
     }
 }
 
+/// How one series of a [`series`] plot is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Style {
+    /// A line through the points in order (broken at non-finite points).
+    Line,
+    /// A dot at each point.
+    Dots,
+}
+
+/// One named series of a [`series`] plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend label (empty: no legend entry).
+    pub label: String,
+    /// The points, (x, y) in the axes' units.
+    pub points: Vec<(f64, f64)>,
+    /// Line or dots.
+    pub style: Style,
+}
+
+/// A general x–y plot of several named series (lines or dots), each in its own colour, with a
+/// title and axis labels (put the units in the labels). Used for the planar and hopper
+/// pictures: phase portraits, projections, return maps against their closed forms, stability
+/// maps (one dotted series per class). Non-finite points are skipped.
+pub fn series(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    dir: &Path,
+    stem: &str,
+) -> Result<Vec<PathBuf>, PlotError> {
+    const WHAT: &str = "series";
+    let total: usize = series.iter().map(|s| s.points.len()).sum();
+    if total == 0 {
+        return Err(PlotError::EmptyInput { what: WHAT });
+    }
+    let finite = || {
+        series
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+    };
+    if finite().next().is_none() {
+        return Err(PlotError::NoFiniteData {
+            what: WHAT,
+            points: total,
+        });
+    }
+    let x_range = span(finite().map(|p| p.0), "x range")?;
+    let y_range = span(finite().map(|p| p.1), "y range")?;
+    let fig = SeriesFigure {
+        title: title.to_string(),
+        x_label: x_label.to_string(),
+        y_label: y_label.to_string(),
+        series: series.to_vec(),
+        x_range,
+        y_range,
+    };
+    render(&fig, dir, stem)
+}
+
 /// Apex height per impact index, with the target apex as a dashed horizontal line: the picture
 /// of the controller's convergence.
 ///
@@ -354,6 +416,62 @@ impl Figure for ReturnMapFigure {
             .legend(|(x, y)| Circle::new((x + 12, y), 4, RED.filled()));
         // The identity line runs from lower left to upper right: keep the legend off it.
         legend(&mut chart, SeriesLabelPosition::UpperLeft)
+    }
+}
+
+struct SeriesFigure {
+    title: String,
+    x_label: String,
+    y_label: String,
+    series: Vec<Series>,
+    x_range: (f64, f64),
+    y_range: (f64, f64),
+}
+
+impl Figure for SeriesFigure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let mut chart = chart(root, &self.title, self.x_range, self.y_range)?;
+        mesh(&mut chart, &self.x_label, &self.y_label)?;
+        let mut labelled = false;
+        for (i, s) in self.series.iter().enumerate() {
+            let colour = Palette99::pick(i).to_rgba();
+            match s.style {
+                Style::Line => {
+                    let style = colour.stroke_width(2);
+                    let mut first = true;
+                    for run in finite_segments(s.points.iter().copied()) {
+                        let drawn = chart.draw_series(LineSeries::new(run, style))?;
+                        if first && !s.label.is_empty() {
+                            drawn.label(s.label.clone()).legend(move |(x, y)| {
+                                PathElement::new(vec![(x, y), (x + 24, y)], style)
+                            });
+                            labelled = true;
+                        }
+                        first = false;
+                    }
+                }
+                Style::Dots => {
+                    let radius = if s.points.len() > 2000 { 1 } else { 3 };
+                    let fill = colour.filled();
+                    let drawn = chart.draw_series(
+                        s.points
+                            .iter()
+                            .filter(|p| p.0.is_finite() && p.1.is_finite())
+                            .map(|&p| Circle::new(p, radius, fill)),
+                    )?;
+                    if !s.label.is_empty() {
+                        drawn
+                            .label(s.label.clone())
+                            .legend(move |(x, y)| Circle::new((x + 12, y), 4, fill));
+                        labelled = true;
+                    }
+                }
+            }
+        }
+        if labelled {
+            legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        }
+        Ok(())
     }
 }
 

@@ -333,3 +333,46 @@ fn huge_ranges_do_not_panic() {
     // Large but drawable values work.
     bifurcation(&[(-1e200, 0.0), (1e200, 1.0)], "a (m)", tmp.path(), "h2").expect("plot");
 }
+
+#[test]
+fn series_plot_draws_lines_and_dots_with_labels() {
+    use dexter_sim::plot::{series, Series, Style};
+    let dir = std::env::temp_dir().join(format!("dexter-plot-series-{}", std::process::id()));
+    let circle: Vec<(f64, f64)> = (0..200)
+        .map(|i| {
+            let t = i as f64 * 0.05;
+            (t.cos(), t.sin())
+        })
+        .collect();
+    let dots = vec![(0.0, 0.0), (0.5, 0.5), (f64::NAN, 1.0)];
+    let files = series(
+        "Projection",
+        "theta (rad)",
+        "theta rate (rad/s)",
+        &[
+            Series {
+                label: "orbit".into(),
+                points: circle,
+                style: Style::Line,
+            },
+            Series {
+                label: "fixed points".into(),
+                points: dots,
+                style: Style::Dots,
+            },
+        ],
+        &dir,
+        "series",
+    )
+    .unwrap();
+    let svg = std::fs::read_to_string(&files[0]).unwrap();
+    assert!(svg.contains("theta (rad)") && svg.contains("fixed points"));
+    let png = std::fs::read(&files[1]).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let empty = series("t", "x", "y", &[], &dir, "empty");
+    assert!(matches!(
+        empty,
+        Err(dexter_sim::plot::PlotError::EmptyInput { .. })
+    ));
+    std::fs::remove_dir_all(&dir).ok();
+}
