@@ -1,44 +1,6 @@
 //! Hard numerical cases: grazing contact, Zeno sequences, a lossless ball over a million
 //! impacts, and scales from millimetres to 100 m. Expected values are closed forms.
 
-mod common {
-    //! Scene loading for these tests.
-    use dexter_sim::run::{run_scene, RunOptions, RunOutcome};
-    use dexter_sim::scene::{parse_set, Scene};
-    use std::path::PathBuf;
-
-    /// The workspace's `scenes/` directory.
-    pub fn scenes_dir() -> PathBuf {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("..")
-            .join("scenes")
-    }
-
-    /// Load `scenes/<name>.toml` with `key=value` overrides.
-    pub fn load_scene(name: &str, sets: &[&str]) -> Scene {
-        let overrides: Vec<_> = sets
-            .iter()
-            .map(|s| parse_set(s).expect("override"))
-            .collect();
-        Scene::load(&scenes_dir().join(format!("{name}.toml")), &overrides).expect("scene loads")
-    }
-
-    /// Run a scene keeping every impact row.
-    pub fn run_rows(scene: &Scene) -> RunOutcome {
-        let opts = RunOptions {
-            record_rows: true,
-            ..RunOptions::default()
-        };
-        run_scene(scene, &opts, None).expect("run")
-    }
-
-    /// |a - b| / |b|.
-    pub fn rel(a: f64, b: f64) -> f64 {
-        ((a - b) / b).abs()
-    }
-}
-
-use common::{load_scene, rel, run_rows};
 use dexter_core::state::{BallState, PaddleState};
 use dexter_sim::effects::actuator::IdealActuator;
 use dexter_sim::effects::jitter::NoJitter;
@@ -49,6 +11,7 @@ use dexter_sim::model::surface::{Actuated, Surface};
 use dexter_sim::report::Summary;
 use dexter_sim::run::{run_scene, RunOptions};
 use dexter_sim::trace::ImpactRow;
+use dexter_tests::{load_scene, rel, run_rows};
 
 const G: f64 = 9.81;
 

@@ -403,26 +403,33 @@ fn elf_sizes(elf: &Path) -> (u64, u64, u64) {
     (text, data, bss)
 }
 
+/// Boot `elf` in QEMU as the `cargo fw` runner in .cargo/config.toml does (semihosting on,
+/// UART unused, `-icount shift=10`), with an optional boot word, and wait for it to exit.
+fn qemu_semihosting(elf: &Path, boot_word: Option<&str>) -> std::process::Output {
+    let mut cmd = Command::new(hil::QEMU);
+    cmd.args([
+        "-machine",
+        hil::QEMU_MACHINE,
+        "-nographic",
+        "-monitor",
+        "none",
+    ])
+    .args(["-serial", "null", "-icount", "shift=10"])
+    .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+    .arg(elf);
+    if let Some(word) = boot_word {
+        cmd.args(["-append", word]);
+    }
+    cmd.stdin(Stdio::null())
+        .output()
+        .expect("run qemu-system-arm")
+}
+
 #[test]
 fn smoke_run_output_and_sizes_match_the_expected_files() {
     let elf = firmware();
     // The same command line as the `cargo fw` runner in .cargo/config.toml.
-    let out = Command::new(hil::QEMU)
-        .args([
-            "-machine",
-            hil::QEMU_MACHINE,
-            "-nographic",
-            "-monitor",
-            "none",
-            "-serial",
-            "null",
-        ])
-        .args(["-icount", "shift=10"])
-        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
-        .arg(&elf)
-        .stdin(Stdio::null())
-        .output()
-        .expect("run qemu-system-arm");
+    let out = qemu_semihosting(&elf, None);
     let mut log = decode_defmt(&elf, &out.stdout);
     log.push_str(&format!(
         "exit status {}\n",
@@ -505,23 +512,7 @@ fn bench_figures() {
         println!("[{variant}] {}", bench_run(&elf, LinkKind::Uart, 2_000));
     }
     let elf = dir.join("bench.elf");
-    let out = Command::new(hil::QEMU)
-        .args([
-            "-machine",
-            hil::QEMU_MACHINE,
-            "-nographic",
-            "-monitor",
-            "none",
-            "-serial",
-            "null",
-        ])
-        .args(["-icount", "shift=10"])
-        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
-        .arg(&elf)
-        .args(["-append", "bench"])
-        .stdin(Stdio::null())
-        .output()
-        .expect("run qemu-system-arm");
+    let out = qemu_semihosting(&elf, Some("bench"));
     print!("[bench]\n{}", decode_defmt(&elf, &out.stdout));
     assert!(out.status.success());
     for variant in ["libm", "fast-math", "bench"] {
@@ -642,23 +633,7 @@ fn free_running_mode_times_out_to_the_safe_state_on_systick_periods() {
 
 fn boot(word: &str) -> (std::process::ExitStatus, String) {
     let elf = firmware();
-    let out = Command::new(hil::QEMU)
-        .args([
-            "-machine",
-            hil::QEMU_MACHINE,
-            "-nographic",
-            "-monitor",
-            "none",
-            "-serial",
-            "null",
-        ])
-        .args(["-icount", "shift=10"])
-        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
-        .arg(&elf)
-        .args(["-append", word])
-        .stdin(Stdio::null())
-        .output()
-        .expect("run qemu-system-arm");
+    let out = qemu_semihosting(&elf, Some(word));
     (out.status, decode_defmt(&elf, &out.stdout))
 }
 

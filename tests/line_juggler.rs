@@ -1,45 +1,8 @@
 //! Paper reproductions on the line juggler (Rizzi & Koditschek sec. 2) and the passive
 //! bounce, against closed forms computed here, independently of the simulator.
 
-mod common {
-    //! Scene loading for these tests.
-    use dexter_sim::run::{run_scene, RunOptions, RunOutcome};
-    use dexter_sim::scene::{parse_set, Scene};
-    use std::path::PathBuf;
-
-    /// The workspace's `scenes/` directory.
-    pub fn scenes_dir() -> PathBuf {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("..")
-            .join("scenes")
-    }
-
-    /// Load `scenes/<name>.toml` with `key=value` overrides.
-    pub fn load_scene(name: &str, sets: &[&str]) -> Scene {
-        let overrides: Vec<_> = sets
-            .iter()
-            .map(|s| parse_set(s).expect("override"))
-            .collect();
-        Scene::load(&scenes_dir().join(format!("{name}.toml")), &overrides).expect("scene loads")
-    }
-
-    /// Run a scene keeping every impact row.
-    pub fn run_rows(scene: &Scene) -> RunOutcome {
-        let opts = RunOptions {
-            record_rows: true,
-            ..RunOptions::default()
-        };
-        run_scene(scene, &opts, None).expect("run")
-    }
-
-    /// |a - b| / |b|.
-    pub fn rel(a: f64, b: f64) -> f64 {
-        ((a - b) / b).abs()
-    }
-}
-
-use common::{load_scene, rel, run_rows};
 use dexter_sim::report::Summary;
+use dexter_tests::{load_scene, rel, run_rows};
 
 /// Passive bounce from apex h0 with restitution e: the n-th impact (0-based) happens at
 /// t0 + 2 v0 e (1 - e^n) / (g (1 - e)), t0 = sqrt(2 h0 / g), v0 = sqrt(2 g h0), and the
@@ -191,7 +154,7 @@ fn sweep_over_kappa1_period_doubles_where_beta_v2_passes_one() {
     use dexter_sim::sweep::{sweep, Range};
     let sets = [dexter_sim::scene::parse_set("stop.impacts=600").unwrap()];
     let table = dexter_sim::scene::load_table(
-        &common::scenes_dir().join("line-juggler-chaotic.toml"),
+        &dexter_tests::scenes_dir().join("line-juggler-chaotic.toml"),
         &sets,
     )
     .unwrap();
