@@ -103,6 +103,9 @@ struct SweepArgs {
     /// The swept key and its values: key.path=FROM:TO:N.
     #[arg(long, value_name = "KEY=FROM:TO:N")]
     range: String,
+    /// A second swept key for a two-dimensional map (planar scenes): key.path=FROM:TO:N.
+    #[arg(long, value_name = "KEY=FROM:TO:N")]
+    range2: Option<String>,
     /// Override a scene key: key.path=value (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -407,6 +410,7 @@ fn cmd_sweep(args: SweepArgs) -> Result<(), Failure> {
             scene: args.scene.clone(),
             sets: args.set.clone(),
             range: args.range.clone(),
+            range2: args.range2.clone(),
             keep: args.keep,
             csv: args.csv.clone(),
             plot: args.plot.clone(),

@@ -44,6 +44,8 @@ pub struct AppSweep {
     pub sets: Vec<String>,
     /// `--range key.path=FROM:TO:N`, unparsed.
     pub range: String,
+    /// `--range2 key.path=FROM:TO:N`, unparsed: a second swept key (planar stability map).
+    pub range2: Option<String>,
     /// Late values kept from each run.
     pub keep: usize,
     /// Write the points as CSV.
