@@ -426,6 +426,27 @@ fn plot_err(e: plot::PlotError) -> AppError {
 }
 
 /// Return map (x), energy map (E) and phase portrait.
+/// One dotted series of successive pairs (v_n, v_{n+1}) per trajectory, and every
+/// coordinate of them (for the axis range).
+fn successive_pairs(
+    trajs: &[Trajectory],
+    values: fn(&Trajectory) -> Vec<f64>,
+    label: &dyn Fn(&Trajectory) -> String,
+) -> (Vec<Series>, Vec<f64>) {
+    let mut series = Vec::new();
+    let mut all = Vec::new();
+    for t in trajs {
+        let pts: Vec<(f64, f64)> = values(t).windows(2).map(|w| (w[0], w[1])).collect();
+        all.extend(pts.iter().flat_map(|p| [p.0, p.1]));
+        series.push(Series {
+            label: label(t),
+            points: pts,
+            style: Style::Dots,
+        });
+    }
+    (series, all)
+}
+
 fn write_plots(
     sc: &Loaded,
     cf: Option<&ClosedForm>,
@@ -443,17 +464,7 @@ fn write_plots(
     };
     let chi_l = sc.params.liftoff_height_m;
     // the bottom-height return map x_{n+1} vs x_n
-    let mut series = Vec::new();
-    let mut all = Vec::new();
-    for t in trajs {
-        let pts: Vec<(f64, f64)> = t.x().windows(2).map(|w| (w[0], w[1])).collect();
-        all.extend(pts.iter().flat_map(|p| [p.0, p.1]));
-        series.push(Series {
-            label: label(t),
-            points: pts,
-            style: Style::Dots,
-        });
-    }
+    let (mut series, all) = successive_pairs(trajs, Trajectory::x, &label);
     if let Some((lo, hi)) = finite_range(all.iter().copied()) {
         let pad = 0.15 * (hi - lo).max(1e-3 * hi.abs().max(1e-3));
         let (mut a, mut b) = (lo - pad, hi + pad);
@@ -508,17 +519,7 @@ fn write_plots(
         eprintln!("warning: fewer than two cycles, no return map plotted");
     }
     // the energy map E_{n+1} vs E_n
-    let mut series = Vec::new();
-    let mut all = Vec::new();
-    for t in trajs {
-        let pts: Vec<(f64, f64)> = t.e().windows(2).map(|w| (w[0], w[1])).collect();
-        all.extend(pts.iter().flat_map(|p| [p.0, p.1]));
-        series.push(Series {
-            label: label(t),
-            points: pts,
-            style: Style::Dots,
-        });
-    }
+    let (mut series, all) = successive_pairs(trajs, Trajectory::e, &label);
     if let Some((lo, hi)) = finite_range(all.iter().copied()) {
         let (unit, coord) = match sc.params.model {
             ModelKind::Linear => ("m^2/s^2", "eta1 (x - chi_eq)^2"),
