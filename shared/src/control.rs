@@ -16,6 +16,7 @@
 //! the estimate is valid again, and then tracks ([`Mode::Track`]).
 
 use crate::estimate::{BallEstimator, Estimate, EstimatorParams};
+use crate::fixed_rate::FixedRate;
 use crate::mirror::{MirrorLaw, PaddleReference};
 use crate::params::{finite, positive, within, ParamError};
 use crate::protocol::{ActuatorCommand, Fault, Mode, SensorFrame, Telemetry};
@@ -278,6 +279,32 @@ impl Controller {
                 Ok(false)
             }
         }
+    }
+}
+
+impl FixedRate for Controller {
+    type Params = ControllerParams;
+    type Frame = SensorFrame;
+    type Command = ActuatorCommand;
+
+    fn new(params: ControllerParams) -> Result<Self, ParamError> {
+        Controller::new(params)
+    }
+
+    fn params(&self) -> &ControllerParams {
+        Controller::params(self)
+    }
+
+    fn step(&mut self, frame: &SensorFrame) -> ActuatorCommand {
+        Controller::step(self, frame)
+    }
+
+    fn safe(&mut self, seq: u32, fault: Fault) -> ActuatorCommand {
+        Controller::safe(self, seq, fault)
+    }
+
+    fn telemetry(&self) -> Telemetry {
+        Controller::telemetry(self)
     }
 }
 

@@ -19,7 +19,8 @@
 //! | [`hop`] | Raibert's fixed thrust and an energy-servo thrust | Koditschek & Bühler 1991, sec. 1.2, 3.1 |
 //! | [`estimate`] | fixed-rate ball-state estimator with impact re-initialisation | — |
 //! | [`track`] | paddle tracking: PD plus feed-forward within limits | — |
-//! | [`control`] | the fixed-rate [`Controller`](control::Controller) and its safe state | — |
+//! | [`fixed_rate`] | the one shape of every controller: [`FixedRate`](fixed_rate::FixedRate) and [`Reply`](fixed_rate::Reply) | — |
+//! | [`control`] | the fixed-rate line-juggler [`Controller`](control::Controller) and its safe state | — |
 //! | [`protocol`] | wire types, postcard + CRC + COBS framing, typed decode errors | — |
 #![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
@@ -28,6 +29,7 @@
 
 pub mod control;
 pub mod estimate;
+pub mod fixed_rate;
 pub mod hop;
 pub mod math;
 pub mod mirror;
