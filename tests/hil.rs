@@ -15,7 +15,7 @@
 //! `cargo fw` boots) and `firmware/expected/sizes.txt` (text/data/bss of the release ELF).
 //! Regenerate them on purpose with `DEXTER_BLESS=1 cargo test -p dexter-tests --test hil`.
 
-use dexter_core::control::ControllerParams;
+use dexter_core::control::{Controller, ControllerParams};
 use dexter_core::protocol::{Fault, Mode, SensorFrame};
 use dexter_sim::controller::{StepController, StepOutput};
 use dexter_sim::hil::{self, HilOptions, LinkKind, LockStep};
@@ -463,7 +463,7 @@ fn bench_run(elf: &Path, link: LinkKind, steps: u32) -> String {
     let mut hil = LockStep::start(params, opts).expect("start HIL");
     let mut plant = BallPaddle::new(&params, 1.2);
     let mut max_du = 0.0f64;
-    let mut reference = dexter_sim::controller::Sil::new(params).unwrap();
+    let mut reference = dexter_sim::controller::Sil::<Controller>::new(params).unwrap();
     let dt = f64::from(params.dt_s);
     for seq in 0..steps {
         let frame = plant.sense(seq);

@@ -1,15 +1,20 @@
 //! The controller side of a closed-loop run, behind one trait so the same plant can be
 //! closed through the core linked in (SIL) or through the firmware in QEMU (HIL).
+//!
+//! [`StepController`] is generic over the core's controller kind ([`FixedRate`]): a plant
+//! sends that controller's frames and applies its commands, whether the controller is the
+//! core linked in ([`Sil`]) or the firmware behind a link (`crate::hil`).
 
-use dexter_core::control::{Controller, ControllerParams};
+use dexter_core::control::Controller;
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::params::ParamError;
-use dexter_core::protocol::{ActuatorCommand, SensorFrame, Telemetry};
+use dexter_core::protocol::Telemetry;
 
-/// What one control step returns.
+/// What one control step returns: a command of the controller kind `C`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StepOutput {
+pub struct StepOutput<Cmd = dexter_core::protocol::ActuatorCommand> {
     /// The command to apply for the next control period.
-    pub command: ActuatorCommand,
+    pub command: Cmd,
     /// Telemetry, when the controller reports it (the firmware does; SIL fills what the core knows).
     pub telemetry: Telemetry,
 }
@@ -55,10 +60,10 @@ pub struct HilReport {
     pub steps_per_wall_second: f64,
 }
 
-/// A controller stepped once per control period with the plant's sensor frame.
-pub trait StepController {
+/// A controller of kind `C` stepped once per control period with the plant's sensor frame.
+pub trait StepController<C: FixedRate = Controller> {
     /// One control step.
-    fn step(&mut self, frame: &SensorFrame) -> Result<StepOutput, ControllerError>;
+    fn step(&mut self, frame: &C::Frame) -> Result<StepOutput<C::Command>, ControllerError>;
     /// HIL figures, for controllers that run on the target (None for SIL).
     fn hil_report(&self) -> Option<HilReport> {
         None
@@ -66,21 +71,26 @@ pub trait StepController {
 }
 
 /// Software in the loop: the shared core, linked in, f32, the same code the firmware runs.
-pub struct Sil {
-    controller: Controller,
+pub struct Sil<C = Controller> {
+    controller: C,
 }
 
-impl Sil {
+impl<C: FixedRate> Sil<C> {
     /// A SIL controller from parameters.
-    pub fn new(params: ControllerParams) -> Result<Self, ControllerError> {
+    pub fn new(params: C::Params) -> Result<Self, ControllerError> {
         Ok(Self {
-            controller: Controller::new(params).map_err(ControllerError::Params)?,
+            controller: C::new(params).map_err(ControllerError::Params)?,
         })
+    }
+
+    /// The controller inside.
+    pub fn controller(&self) -> &C {
+        &self.controller
     }
 }
 
-impl StepController for Sil {
-    fn step(&mut self, frame: &SensorFrame) -> Result<StepOutput, ControllerError> {
+impl<C: FixedRate> StepController<C> for Sil<C> {
+    fn step(&mut self, frame: &C::Frame) -> Result<StepOutput<C::Command>, ControllerError> {
         let command = self.controller.step(frame);
         Ok(StepOutput {
             command,
