@@ -142,14 +142,19 @@ fn run_failure(message: impl std::fmt::Display) -> Failure {
     }
 }
 
-/// The workspace root: this crate's parent, else the current directory.
+/// Where the default run finds `scenes/line-juggler.toml` and writes `out/`: the current
+/// directory if it has that scene, else this crate's workspace, else the current directory.
 fn workspace_root() -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    if root.join("scenes").is_dir() {
-        root.canonicalize().unwrap_or(root)
+    let here = PathBuf::from(".");
+    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let root = if here.join("scenes").join("line-juggler.toml").is_file() {
+        here
+    } else if built.join("scenes").is_dir() {
+        built
     } else {
-        PathBuf::from(".")
-    }
+        return here;
+    };
+    root.canonicalize().unwrap_or(root)
 }
 
 fn load_table(path: &Path, sets: &[String]) -> Result<toml::Table, Failure> {
