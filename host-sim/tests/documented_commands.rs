@@ -97,10 +97,8 @@ fn args_of(line: &str) -> Option<Vec<String>> {
         }
     } else if let Some(r) = line.strip_prefix("$ dexter ") {
         r
-    } else if let Some(r) = line.strip_prefix("dexter ") {
-        r
     } else {
-        return None;
+        line.strip_prefix("dexter ")?
     };
     assert!(
         !rest.contains(['"', '\'', '|', '<', '>', '$', '`']),

@@ -1,7 +1,7 @@
 //! Range and cross-field checks; every error names the dotted key.
 
-use super::schema::*;
-use super::SceneError;
+use super::scene::*;
+use crate::scene::SceneError;
 use dexter_core::control::ControllerParams;
 use dexter_core::estimate::EstimatorParams;
 use dexter_core::params::ParamError;
@@ -301,17 +301,17 @@ mod tests {
 
     #[test]
     fn overrides_pass_the_same_checks() {
-        let o = vec![super::super::parse_set("physics.restitution=2").unwrap()];
+        let o = vec![crate::scene::parse_set("physics.restitution=2").unwrap()];
         assert_eq!(
             Scene::from_toml_str("", &o).unwrap_err().key,
             "physics.restitution"
         );
-        let o = vec![super::super::parse_set("physics.nope=2").unwrap()];
+        let o = vec![crate::scene::parse_set("physics.nope=2").unwrap()];
         assert_eq!(
             Scene::from_toml_str("", &o).unwrap_err().key,
             "physics.nope"
         );
-        let o = vec![super::super::parse_set("physics.restitution=0.5").unwrap()];
+        let o = vec![crate::scene::parse_set("physics.restitution=0.5").unwrap()];
         assert_eq!(
             Scene::from_toml_str("", &o).unwrap().physics.restitution,
             0.5

@@ -1,0 +1,4 @@
+//! placeholder
+/// The planar juggler system.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlanarJuggler;
