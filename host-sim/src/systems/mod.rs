@@ -185,7 +185,12 @@ impl<S: System> Dispatch for S {
 
 /// Every system, in the order they are asked to claim a scene: the line system last (it
 /// claims every scene no other system claims).
-pub static SYSTEMS: [&dyn Dispatch; 3] = [&hopper::HopperSystem, &planar::Planar, &line::Line];
+pub static SYSTEMS: [&dyn Dispatch; 4] = [
+    &hopper::HopperSystem,
+    &planar_juggler::PlanarJugglerSystem,
+    &planar::PlanarSystem,
+    &line::LineSystem,
+];
 
 /// The system that runs a scene with these top-level tables.
 pub fn claim(table: &toml::Table) -> &'static dyn Dispatch {
@@ -193,5 +198,5 @@ pub fn claim(table: &toml::Table) -> &'static dyn Dispatch {
         .iter()
         .copied()
         .find(|s| s.claims(table))
-        .unwrap_or(&line::Line)
+        .unwrap_or(&line::LineSystem)
 }

@@ -40,7 +40,7 @@ use dexter_core::control::{Controller, ControllerParams};
 
 /// The line system.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Line;
+pub struct LineSystem;
 
 /// A line run's result: its summary, and the phase samples the plots draw.
 #[derive(Clone, Debug)]
@@ -81,7 +81,7 @@ fn needs_sil(scene: &Scene) -> SceneError {
 /// Tables other systems claim: a scene with one of them is not a line scene.
 const OTHER_TABLES: [&str; 3] = ["hopper", "planar", "planar_juggler"];
 
-impl System for Line {
+impl System for LineSystem {
     const NAME: &'static str = "line";
     type Config = Scene;
     type Controller = Controller;

@@ -4,7 +4,7 @@
 
 use super::scene::Scene;
 use super::trace::ImpactRow;
-use super::{Line, LineOutcome};
+use super::{LineOutcome, LineSystem};
 use crate::plot;
 use crate::stream::Decimator;
 use crate::systems::Plots;
@@ -26,7 +26,7 @@ pub struct LinePlots {
     stem: String,
 }
 
-impl Plots<Line> for LinePlots {
+impl Plots<LineSystem> for LinePlots {
     fn new(cfg: &Scene) -> Self {
         Self {
             apexes: Decimator::default(),

@@ -4,7 +4,7 @@
 
 use super::run::{run_streaming, RunError, RunOptions};
 use super::scene::Scene;
-use super::Line;
+use super::LineSystem;
 use crate::output::Sig17;
 use crate::plot;
 use crate::stream::{Decimator, Tail};
@@ -55,7 +55,7 @@ pub struct LineSweepReport {
     points: Decimator<(f64, f64)>,
 }
 
-impl Sweeps for Line {
+impl Sweeps for LineSystem {
     type Point = LatePoint;
     type Report = LineSweepReport;
 
@@ -76,7 +76,7 @@ impl Sweeps for Line {
     }
 }
 
-impl SweepReport<Line> for LineSweepReport {
+impl SweepReport<LineSystem> for LineSweepReport {
     fn csv_header(&self) -> String {
         format!("{},apex_height_m", self.key)
     }

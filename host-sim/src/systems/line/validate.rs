@@ -7,6 +7,10 @@ use dexter_core::estimate::EstimatorParams;
 use dexter_core::params::ParamError;
 use dexter_core::track::PaddleLimits;
 
+/// Longest period `analysis.max_period` may ask for: the summary keeps the last
+/// 5 x `max_period` apexes (`summary::ApexStats`).
+pub const MAX_PERIOD: u32 = 1024;
+
 fn finite(key: &str, v: f64) -> Result<f64, SceneError> {
     if v.is_finite() {
         Ok(v)
@@ -152,8 +156,11 @@ impl Scene {
         let an = &self.analysis;
         positive("analysis.converge_tolerance", an.converge_tolerance)?;
         positive("analysis.period_tolerance", an.period_tolerance)?;
-        if an.max_period == 0 {
-            return Err(SceneError::new("analysis.max_period", "must be >= 1"));
+        if an.max_period == 0 || an.max_period > MAX_PERIOD {
+            return Err(SceneError::new(
+                "analysis.max_period",
+                format!("must be in 1..={MAX_PERIOD}, got {}", an.max_period),
+            ));
         }
         Ok(())
     }

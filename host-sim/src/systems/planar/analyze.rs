@@ -1,7 +1,7 @@
 //! `dexter analyze` on a planar scene: the impact-to-impact map linearized at its fixed
 //! point, beside the closed forms (eq. 11, 16, 26; `docs/planar.md`).
 
-use super::Planar;
+use super::PlanarSystem;
 use crate::model::planar::analysis::{self, AnalysisReport};
 use crate::model::planar::{Body, PlanarModel};
 use crate::scene::{parse_sets, SceneFile};
@@ -200,7 +200,7 @@ fn analyze_json(name: &str, r: &AnalysisReport) -> Result<String, String> {
 /// `dexter analyze` on a planar scene.
 pub fn analyze(file: &SceneFile, req: &AnalyzeRequest) -> Result<(), Failure> {
     let table = file.table_with(&parse_sets(&req.sets)?)?;
-    let cfg = Planar::parse(file, table)?;
+    let cfg = PlanarSystem::parse(file, table)?;
     let report = analysis::analyze(&cfg.model).map_err(super::planar_failure)?;
     let name = &file.stem;
     print_result(

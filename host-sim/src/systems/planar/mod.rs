@@ -39,7 +39,7 @@ struct PlanarFile {
 
 /// The planar body system.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Planar;
+pub struct PlanarSystem;
 
 /// A parsed, validated planar scene.
 #[derive(Clone, Debug, PartialEq)]
@@ -91,7 +91,7 @@ fn config_of(name: &str, table: toml::Table) -> Result<PlanarConfig, SceneError>
     })
 }
 
-impl System for Planar {
+impl System for PlanarSystem {
     const NAME: &'static str = "planar";
     type Config = PlanarConfig;
     type Controller = NoController;

@@ -5,7 +5,7 @@
 //! [`crate::stream::PLOT_MAX_POINTS`] points.
 
 use super::trace::PlanarRow;
-use super::{Planar, PlanarConfig, PlanarOutcome};
+use super::{PlanarConfig, PlanarOutcome, PlanarSystem};
 use crate::model::planar::{analysis, Body, ImpactRecord};
 use crate::plot::Chart;
 use crate::stream::Decimator;
@@ -27,7 +27,7 @@ pub struct PlanarPlots {
     impacts: usize,
 }
 
-impl Plots<Planar> for PlanarPlots {
+impl Plots<PlanarSystem> for PlanarPlots {
     fn new(_: &PlanarConfig) -> Self {
         Self {
             first: Vec::new(),

@@ -5,7 +5,7 @@
 //! grid is printed; `--plot` draws `{stem}-stability`.
 
 use super::summary::{class_name, class_words, kappa_crit_of, summarize};
-use super::{config_of, Planar};
+use super::{config_of, PlanarSystem};
 use crate::model::planar::analysis::CellClass;
 use crate::model::planar::{PlanarParams, RunEnd};
 use crate::output::Sig17;
@@ -69,7 +69,7 @@ pub struct PlanarSweepReport {
     kappa_crit: f64,
 }
 
-impl Sweeps for Planar {
+impl Sweeps for PlanarSystem {
     type Point = SweepCell;
     type Report = PlanarSweepReport;
     const TWO_AXES: bool = true;
@@ -121,7 +121,7 @@ impl Sweeps for Planar {
     }
 }
 
-impl SweepReport<Planar> for PlanarSweepReport {
+impl SweepReport<PlanarSystem> for PlanarSweepReport {
     fn csv_header(&self) -> String {
         let y = self
             .y_key
