@@ -379,3 +379,34 @@ fn vs_closed_text(t: &Trajectory, cf: Option<&ClosedForm>) -> String {
         _ => String::new(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The period of the last [`TAIL_CYCLES`] values equals the period of all of them.
+    #[test]
+    fn the_tail_gives_the_period_of_the_whole_sequence() {
+        let seqs: [Box<dyn Fn(usize) -> f64>; 5] = [
+            Box::new(|i| 1.0 + 0.3 * (-(i as f64) / 50.0).exp()),
+            Box::new(|i| [1.0, 2.0][i % 2]),
+            Box::new(|i| {
+                [1.0, 2.0][i % 2] + 0.4 * (-(i as f64) / 300.0).exp() * [1.0, -1.0][i % 2]
+            }),
+            Box::new(|i| [1.0, 2.0, 1.5, 3.0][i % 4]),
+            Box::new(|i| ((i as f64) * 1.7).sin()),
+        ];
+        for (k, f) in seqs.iter().enumerate() {
+            for n in [10, 100, 191, 192, 256, 257, 1000] {
+                let all: Vec<f64> = (0..n).map(f).collect();
+                let tail = &all[n.saturating_sub(TAIL_CYCLES)..];
+                assert_eq!(
+                    period_of(tail, n),
+                    period_of(&all, n),
+                    "sequence {k}, n {n}"
+                );
+            }
+        }
+        assert_eq!(period_of(&[[1.0, 2.0][0]; 100], 100), Some(1));
+    }
+}

@@ -240,6 +240,41 @@ mod tests {
         assert_eq!(converged_after(&[0.5; 20], 1.0, 0.01), None);
     }
 
+    /// ApexStats over a stream gives what the functions give on the whole sequence.
+    #[test]
+    fn streaming_statistics_equal_the_whole_sequence() {
+        let mut scene = Scene::default();
+        scene.control.mode = ControlMode::IdealMirror;
+        scene.control.target_apex_m = Some(1.0);
+        scene.analysis.max_period = 3;
+        // settling, a period-3 stretch, a period-2 stretch, noise, convergence
+        let mut seq = Vec::new();
+        let mut x = 0.37_f64;
+        for i in 0..400 {
+            x = 3.9 * x * (1.0 - x);
+            seq.push(match i {
+                0..=99 => 1.0 + 0.5 * (-(i as f64) / 20.0).exp(),
+                100..=199 => [0.8, 1.1, 1.3][i % 3],
+                200..=299 => [0.9, 1.2][i % 2],
+                _ => 1.0 + 0.02 * (x - 0.5),
+            });
+        }
+        for n in [0, 3, 14, 15, 99, 150, 160, 250, 399, 400] {
+            let mut stats = ApexStats::for_scene(&scene);
+            for &a in &seq[..n] {
+                stats.push(a);
+            }
+            let whole = &seq[..n];
+            assert_eq!(
+                stats.converged_after(),
+                converged_after(whole, 1.0, 0.01),
+                "{n}"
+            );
+            assert_eq!(stats.period(), detect_period(whole, 3, 1e-3), "{n}");
+            assert_eq!(stats.last(), whole.last().copied(), "{n}");
+        }
+    }
+
     #[test]
     fn period_two_is_found_and_period_one_preferred() {
         let p2: Vec<f64> = (0..20)
