@@ -60,11 +60,13 @@ impl AtomicFile {
         let name = path
             .file_name()
             .map_or("output".into(), |n| n.to_string_lossy());
-        let tmp = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
-            .suffix(".tmp")
-            .tempfile_in(dir)
-            .map_err(err)?;
+        let prefix = format!(".{name}.");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        // the mode a new file gets from File::create (0o666 less the umask), not 0o600
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        let tmp = builder.tempfile_in(dir).map_err(err)?;
         Ok(Self {
             path: path.to_path_buf(),
             writer: BufWriter::with_capacity(1 << 16, tmp),
@@ -208,6 +210,17 @@ mod tests {
         f.commit().unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "a,b\n1,2\n");
         assert_eq!(entries(&dir.join("sub")), ["t.csv"], "no temporary left");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&path).unwrap().permissions().mode();
+            let plain = std::fs::metadata(dir.join("sub"))
+                .unwrap()
+                .permissions()
+                .mode();
+            // readable as a file made by File::create is (the umask permitting)
+            assert_eq!(mode & 0o444, plain & 0o444, "{mode:o}");
+        }
         let _ = std::fs::remove_dir_all(&dir);
     }
 
