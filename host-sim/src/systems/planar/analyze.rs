@@ -78,6 +78,32 @@ fn regime(r: &AnalysisReport) -> String {
     }
 }
 
+/// Each numerical eigenvalue beside the closed form matched to it.
+fn eigenvalue_table(r: &AnalysisReport, model: &PlanarModel) -> String {
+    let mut o = format!(
+        "  eigenvalues   {:<36} {:>13}   {:<36} which\n",
+        "numerical (re + im i)", "|lambda|", "closed form"
+    );
+    let labels = closed_form_labels(model);
+    for (ev, m) in r.eigenvalues.iter().zip(match_closed_forms(r)) {
+        let (cf, which) = match m {
+            Some(i) => {
+                let (re, im) = r.closed_form.predicted[i];
+                (complex(re, im), labels[i])
+            }
+            None => ("-".to_string(), ""),
+        };
+        let _ = writeln!(
+            o,
+            "                {:<36} {:>13.10}   {:<36} {which}",
+            complex(ev.re, ev.im),
+            ev.modulus,
+            cf
+        );
+    }
+    o
+}
+
 fn analyze_text(name: &str, r: &AnalysisReport, model: &PlanarModel) -> String {
     let p = &r.params;
     let c = &r.closed_form;
@@ -110,28 +136,7 @@ fn analyze_text(name: &str, r: &AnalysisReport, model: &PlanarModel) -> String {
         "  Jacobian:     central differences, Richardson x2; error estimate {:.1e}",
         r.jacobian_error
     );
-    let _ = writeln!(
-        o,
-        "  eigenvalues   {:<36} {:>13}   {:<36} which",
-        "numerical (re + im i)", "|lambda|", "closed form"
-    );
-    let labels = closed_form_labels(model);
-    for (ev, m) in r.eigenvalues.iter().zip(match_closed_forms(r)) {
-        let (cf, which) = match m {
-            Some(i) => {
-                let (re, im) = c.predicted[i];
-                (complex(re, im), labels[i])
-            }
-            None => ("-".to_string(), ""),
-        };
-        let _ = writeln!(
-            o,
-            "                {:<36} {:>13.10}   {:<36} {which}",
-            complex(ev.re, ev.im),
-            ev.modulus,
-            cf
-        );
-    }
+    o += &eigenvalue_table(r, model);
     let _ = writeln!(
         o,
         "  max |closed form - numerical|: {:.1e}",

@@ -181,25 +181,21 @@ pub(super) fn class_words(c: CellClass) -> &'static str {
     }
 }
 
-pub(super) fn summary_text(s: &RunSummary) -> String {
-    let mut o = String::new();
-    let _ = writeln!(o, "planar scene {}", s.scene);
-    match s.body {
-        "rigid" => {
-            let _ = writeln!(
-                o,
-                "  model:        rigid body, rho {} m, l {} m, G {} m/s^2, {}",
-                s.rho_m, s.l_m, s.gravity_mps2, s.contact
-            );
-        }
-        _ => {
-            let _ = writeln!(
-                o,
-                "  model:        point mass, G {} m/s^2, {}",
-                s.gravity_mps2, s.contact
-            );
-        }
-    }
+/// The scene's lines of the summary: model, control, contact.
+fn scene_text(s: &RunSummary) -> String {
+    let mut o = format!("planar scene {}\n", s.scene);
+    let _ = match s.body {
+        "rigid" => writeln!(
+            o,
+            "  model:        rigid body, rho {} m, l {} m, G {} m/s^2, {}",
+            s.rho_m, s.l_m, s.gravity_mps2, s.contact
+        ),
+        _ => writeln!(
+            o,
+            "  model:        point mass, G {} m/s^2, {}",
+            s.gravity_mps2, s.contact
+        ),
+    };
     let _ = writeln!(
         o,
         "  control:      kappa {}, kappa_E {} s^2/m^2 ({})",
@@ -216,6 +212,11 @@ pub(super) fn summary_text(s: &RunSummary) -> String {
         "  contact:      e {}, mu {}, timing noise sigma {} s (seed {})",
         s.restitution, s.friction_mu, s.timing_noise_s, s.seed
     );
+    o
+}
+
+pub(super) fn summary_text(s: &RunSummary) -> String {
+    let mut o = scene_text(s);
     if s.stayed_up {
         let _ = writeln!(
             o,
