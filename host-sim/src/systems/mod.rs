@@ -47,11 +47,38 @@ pub trait System: Sync + Sized + 'static {
     /// What the `--plot` pictures keep of the rows (bounded) and how they are drawn.
     type Plots: Plots<Self>;
 
-    /// True if this system runs a scene with these top-level tables.
-    fn claims(table: &toml::Table) -> bool;
+    /// The top-level scene table that selects this system (`planar`, `hopper`, ...).
+    const TABLE: &'static str;
 
-    /// Apply `--impacts` / `--duration` to the scene table, or refuse the option.
-    fn set_length(table: &mut toml::Table, length: &RunLength) -> Result<(), Failure>;
+    /// True if this system runs a scene with these top-level tables: by default, if it has
+    /// [`System::TABLE`].
+    fn claims(table: &toml::Table) -> bool {
+        table.contains_key(Self::TABLE)
+    }
+
+    /// The scene key `--impacts N` sets (e.g. `planar.impacts`, `hopper.cycles`).
+    const IMPACTS_KEY: &'static str;
+    /// The largest `--impacts` the system runs.
+    const MAX_IMPACTS: u64 = i64::MAX as u64;
+
+    /// Apply `--impacts` / `--duration` to the scene table, or refuse the option. By
+    /// default `--impacts N` sets [`System::IMPACTS_KEY`] (1 ..= [`System::MAX_IMPACTS`])
+    /// and `--duration` is refused.
+    fn set_length(table: &mut toml::Table, length: &RunLength) -> Result<(), Failure> {
+        length.no_duration::<Self>()?;
+        if let Some(n) = length.impacts {
+            if n == 0 || n > Self::MAX_IMPACTS {
+                return Err(Failure::scene(format!(
+                    "--impacts ({}) must be in 1..={}, got {n}",
+                    Self::IMPACTS_KEY,
+                    Self::MAX_IMPACTS
+                )));
+            }
+            let value = toml::Value::Integer(n as i64);
+            crate::scene::apply_set(table, Self::IMPACTS_KEY, value)?;
+        }
+        Ok(())
+    }
 
     /// Parse and validate the scene (`--set` and the run length applied): unknown keys
     /// are denied and every error names its key.
@@ -184,7 +211,7 @@ impl<S: System> Dispatch for S {
 }
 
 /// Every system, in the order they are asked to claim a scene: the line system last (it
-/// claims every scene no other system claims).
+/// claims every scene, so it runs those no other system claims).
 pub static SYSTEMS: [&dyn Dispatch; 4] = [
     &hopper::HopperSystem,
     &planar_juggler::PlanarJugglerSystem,

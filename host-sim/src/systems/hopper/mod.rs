@@ -23,7 +23,7 @@ use crate::controller::StepController;
 use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Hopper, HopperParams, RunEnd, Start, MAX_SAMPLES};
 use crate::scene::{deserialize, SceneError, SceneFile};
-use crate::verbs::{AnalyzeRequest, Failure, RunLength, Setup, SweepRequest};
+use crate::verbs::{AnalyzeRequest, Failure, Setup, SweepRequest};
 use serde::Deserialize;
 use std::time::Instant;
 
@@ -136,28 +136,14 @@ pub fn start_height(s: &Start) -> f64 {
 
 impl System for HopperSystem {
     const NAME: &'static str = "hopper";
+    const TABLE: &'static str = "hopper";
+    const IMPACTS_KEY: &'static str = "hopper.cycles";
+    const MAX_IMPACTS: u64 = MAX_RUN_CYCLES;
     type Config = HopperConfig;
     type Controller = NoController;
     type Row = HopperRow;
     type Outcome = HopperOutcome;
     type Plots = plots::HopperPlots;
-
-    fn claims(table: &toml::Table) -> bool {
-        table.contains_key("hopper")
-    }
-
-    fn set_length(table: &mut toml::Table, length: &RunLength) -> Result<(), Failure> {
-        length.no_duration::<Self>()?;
-        if let Some(n) = length.impacts {
-            if n == 0 || n > MAX_RUN_CYCLES {
-                return Err(Failure::scene(format!(
-                    "--impacts (hopper.cycles) must be in 1..={MAX_RUN_CYCLES}, got {n}"
-                )));
-            }
-            crate::scene::apply_set(table, "hopper.cycles", toml::Value::Integer(n as i64))?;
-        }
-        Ok(())
-    }
 
     fn parse(file: &SceneFile, table: toml::Table) -> Result<HopperConfig, SceneError> {
         HopperConfig::from_table(&file.stem, table)

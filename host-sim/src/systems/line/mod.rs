@@ -14,8 +14,7 @@
 //! | [`plots`] | apex per impact, return map, phase portrait |
 //! | [`sweep`] | late apexes over one key (bifurcation diagram) |
 //!
-//! It claims every scene that no other system claims (no `[hopper]`, `[planar]`,
-//! `[planar_juggler]` table).
+//! It runs every scene that no other system claims (the registry asks it last).
 
 pub mod assemble;
 pub mod loops;
@@ -78,19 +77,21 @@ fn needs_sil(scene: &Scene) -> SceneError {
     )
 }
 
-/// Tables other systems claim: a scene with one of them is not a line scene.
-const OTHER_TABLES: [&str; 3] = ["hopper", "planar", "planar_juggler"];
-
 impl System for LineSystem {
     const NAME: &'static str = "line";
+    /// No table of its own: `[physics]`, `[control]`, ... (`docs/scenes.md`).
+    const TABLE: &'static str = "";
+    const IMPACTS_KEY: &'static str = "stop.impacts";
     type Config = Scene;
     type Controller = Controller;
     type Row = ImpactRow;
     type Outcome = LineOutcome;
     type Plots = plots::LinePlots;
 
-    fn claims(table: &toml::Table) -> bool {
-        !OTHER_TABLES.iter().any(|t| table.contains_key(*t))
+    /// Every scene: the registry asks the line system last, so it runs the scenes no
+    /// other system claims.
+    fn claims(_: &toml::Table) -> bool {
+        true
     }
 
     fn set_length(table: &mut toml::Table, length: &RunLength) -> Result<(), Failure> {

@@ -17,10 +17,10 @@ use self::summary::{summarize, summary_text, RunSummary};
 use self::trace::PlanarRow;
 use super::{NoController, Outcome, System};
 use crate::controller::StepController;
-use crate::model::planar::{PlanarError, PlanarModel, PlanarParams, PlanarState};
+use crate::model::planar::{PlanarError, PlanarModel, PlanarParams, PlanarState, MAX_IMPACTS};
 use crate::output::{json_text, JsonStyle};
 use crate::scene::{deserialize, SceneError, SceneFile};
-use crate::verbs::{AnalyzeRequest, Failure, RunLength, Setup, SweepRequest};
+use crate::verbs::{AnalyzeRequest, Failure, Setup, SweepRequest};
 use serde::Deserialize;
 use std::time::Instant;
 
@@ -93,28 +93,14 @@ fn config_of(name: &str, table: toml::Table) -> Result<PlanarConfig, SceneError>
 
 impl System for PlanarSystem {
     const NAME: &'static str = "planar";
+    const TABLE: &'static str = "planar";
+    const IMPACTS_KEY: &'static str = "planar.impacts";
+    const MAX_IMPACTS: u64 = MAX_IMPACTS as u64;
     type Config = PlanarConfig;
     type Controller = NoController;
     type Row = PlanarRow;
     type Outcome = PlanarOutcome;
     type Plots = plots::PlanarPlots;
-
-    fn claims(table: &toml::Table) -> bool {
-        table.contains_key("planar")
-    }
-
-    fn set_length(table: &mut toml::Table, length: &RunLength) -> Result<(), Failure> {
-        length.no_duration::<Self>()?;
-        if let Some(n) = length.impacts {
-            let n = i64::try_from(n).map_err(|_| {
-                Failure::scene(format!(
-                    "--impacts {n}: planar.impacts is out of its allowed range"
-                ))
-            })?;
-            crate::scene::apply_set(table, "planar.impacts", toml::Value::Integer(n))?;
-        }
-        Ok(())
-    }
 
     fn parse(file: &SceneFile, table: toml::Table) -> Result<PlanarConfig, SceneError> {
         config_of(&file.stem, table)

@@ -19,7 +19,7 @@ use super::{NoController, System};
 use crate::controller::StepController;
 use crate::model::planar::juggler::{JuggleEnd, JugglerParams, PlanarJuggler, MAX_JUGGLES};
 use crate::scene::{deserialize, SceneError, SceneFile};
-use crate::verbs::{Failure, RunLength, Setup};
+use crate::verbs::{Failure, Setup};
 use dexter_core::params::ParamError;
 use dexter_core::planar::PlanarBall;
 use serde::{Deserialize, Serialize};
@@ -243,25 +243,14 @@ impl JugglerTable {
 
 impl System for PlanarJugglerSystem {
     const NAME: &'static str = "planar juggler";
+    const TABLE: &'static str = "planar_juggler";
+    const IMPACTS_KEY: &'static str = "planar_juggler.impacts";
+    const MAX_IMPACTS: u64 = MAX_JUGGLES as u64;
     type Config = JugglerConfig;
     type Controller = NoController;
     type Row = BatRow;
     type Outcome = JugglerOutcome;
     type Plots = plots::JugglerPlots;
-
-    fn claims(table: &toml::Table) -> bool {
-        table.contains_key("planar_juggler")
-    }
-
-    fn set_length(table: &mut toml::Table, length: &RunLength) -> Result<(), Failure> {
-        length.no_duration::<Self>()?;
-        if let Some(n) = length.impacts {
-            let n = i64::try_from(n)
-                .map_err(|_| Failure::usage(format!("--impacts {n} is too large")))?;
-            crate::scene::apply_set(table, "planar_juggler.impacts", toml::Value::Integer(n))?;
-        }
-        Ok(())
-    }
 
     fn parse(file: &SceneFile, table: toml::Table) -> Result<JugglerConfig, SceneError> {
         deserialize::<JugglerFile>(table)?
