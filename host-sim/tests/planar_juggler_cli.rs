@@ -4,50 +4,25 @@
 //! v+ = (alpha + (1 + alpha)(kappa0 + kappa1 (eta* - v^2/2))) v, and every run settles on
 //! its fixed point eta_fp = eta* - (1 - alpha - (1 + alpha) kappa0)/((1 + alpha) kappa1).
 
+mod common;
+
+use common::{dexter, ok, scene, scratch};
 use serde_json::Value;
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
 const G: f64 = 9.81;
 const ALPHA: f64 = 0.7;
 const H_STAR: f64 = 0.5;
 const X_STAR: f64 = 1.0;
 
-fn dexter(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dexter"))
-        .args(args)
-        .output()
-        .expect("the dexter binary runs")
-}
-
-fn scene(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../scenes")
-        .join(format!("{name}.toml"))
-        .display()
-        .to_string()
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dexter-pj-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
-
-fn ok(args: &[&str]) -> Output {
-    let out = dexter(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
+    scratch(&format!("pj-{name}"))
 }
 
 fn json(args: &[&str]) -> Value {
     let mut a = args.to_vec();
     a.push("--json");
-    serde_json::from_slice(&ok(&a).stdout).expect("one JSON object")
+    common::json(&a)
 }
 
 fn f(v: &Value) -> f64 {

@@ -3,31 +3,12 @@
 //! directories created, sweeps that refuse what they cannot hold and give the same result on
 //! one core as on all, options a system does not support refused.
 
+mod common;
+
+use common::{dexter, scene, scratch};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
-
-fn dexter(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dexter"))
-        .args(args)
-        .output()
-        .expect("the dexter binary runs")
-}
-
-fn scene(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../scenes")
-        .join(format!("{name}.toml"))
-        .display()
-        .to_string()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dexter-shared-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn files_in(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -150,17 +131,16 @@ fn a_write_that_fails_leaves_no_partial_file() {
     let dir = scratch("full");
     let trace = dir.join("trace.csv");
     // 2000 impacts of 8 columns at 17 digits are ~350 KiB: more than the limit
-    let out = with_file_limit(
-        64,
-        &[
-            "run",
-            &scene("line-juggler-ideal"),
-            "--impacts",
-            "2000",
-            "--trace",
-            trace.to_str().unwrap(),
-        ],
-    );
+    let ideal = scene("line-juggler-ideal");
+    let args = [
+        "run",
+        &ideal,
+        "--impacts",
+        "2000",
+        "--trace",
+        trace.to_str().unwrap(),
+    ];
+    let out = with_file_limit(64, &args);
     let (_, err) = text(&out);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
@@ -170,17 +150,7 @@ fn a_write_that_fails_leaves_no_partial_file() {
     assert_eq!(files_in(&dir), Vec::<String>::new(), "{err}");
     // an existing file is left as it was
     std::fs::write(&trace, "old\n").unwrap();
-    let _ = with_file_limit(
-        64,
-        &[
-            "run",
-            &scene("line-juggler-ideal"),
-            "--impacts",
-            "2000",
-            "--trace",
-            trace.to_str().unwrap(),
-        ],
-    );
+    let _ = with_file_limit(64, &args);
     assert_eq!(std::fs::read_to_string(&trace).unwrap(), "old\n");
     assert_eq!(files_in(&dir), ["trace.csv"]);
     // plots: the same for the PNGs (each ~100 KiB, over a 32 KiB limit)
