@@ -6,7 +6,7 @@
 //! | [`hopper`] | `[hopper]` | Koditschek & Bühler's vertical hopper: return maps, period doubling |
 //! | [`planar_juggler`] | `[planar_juggler]` | Rizzi & Koditschek's planar juggler, mirror law eq. 12 or the modified law eq. 15 |
 //! | [`planar`] | `[planar]` | Zumel & Erdmann's bouncing body on the kappa-tilt table |
-//! | [`line`] | any other (`[physics]`, `[control]`, ...) | the line juggler and the passive bounce |
+//! | [`line`](mod@line) | any other (`[physics]`, `[control]`, ...) | the line juggler and the passive bounce |
 //!
 //! How to add one: `docs/adding-a-system.md`.
 
