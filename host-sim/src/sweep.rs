@@ -151,7 +151,7 @@ impl Grid {
 
 /// Evaluate `eval(i)` for `i` in `0..n` on every core and pass each result to `consume` in
 /// order of `i`; the first error, in that order, ends the sweep. `progress` advances once
-/// per point.
+/// per point (the caller finishes it).
 pub fn map_ordered<T, E>(
     n: usize,
     progress: &indicatif::ProgressBar,
@@ -178,7 +178,6 @@ where
         }
         start = end;
     }
-    progress.finish_and_clear();
     Ok(())
 }
 

@@ -253,6 +253,20 @@ fn options_a_system_does_not_take_are_refused() {
         assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(word), "{args:?}: {err}");
     }
+    // a sweep whose first point is bad prints no CSV at all
+    let out = dexter(&[
+        "sweep",
+        &scene("hopper-fig11"),
+        "--range",
+        "hopper.spring_eta1=-1:1:3",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty(), "{}", text(&out).0);
+    assert!(
+        text(&out).1.contains("hopper.spring_eta1 = -1"),
+        "{}",
+        text(&out).1
+    );
     // --hil on a line scene without a controller: the mode is named, before QEMU starts
     let out = dexter(&["run", &scene("passive-bounce"), "--hil"]);
     let (_, err) = text(&out);

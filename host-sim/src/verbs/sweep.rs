@@ -158,10 +158,8 @@ pub fn sweep<S: Sweeps>(file: &SceneFile, req: &SweepRequest) -> Result<(), Fail
     };
     let mut report = S::report(&base);
     let mut csv = CsvOut::open(req.csv.as_deref())?;
-    let header = report.csv_header();
-    writeln!(csv.writer(), "{header}").map_err(|e| csv.error(e))?;
     let bar = progress::bar(base.grid.len() as u64, "points", true);
-    map_ordered(
+    let swept = map_ordered(
         base.grid.len(),
         &bar,
         |i| {
@@ -170,13 +168,22 @@ pub fn sweep<S: Sweeps>(file: &SceneFile, req: &SweepRequest) -> Result<(), Fail
         },
         |i, p| {
             let (x, y) = base.grid.point(i);
-            report
-                .write_csv(x, y, &p, csv.writer())
+            let w = csv.writer();
+            // the header with the first row: a sweep whose first point fails prints nothing
+            let header = if i == 0 {
+                writeln!(w, "{}", report.csv_header())
+            } else {
+                Ok(())
+            };
+            header
+                .and_then(|_| report.write_csv(x, y, &p, w))
                 .map_err(|e| csv.error(e))?;
             report.add(x, y, p);
             Ok(())
         },
-    )?;
+    );
+    bar.finish_and_clear();
+    swept?;
     csv.finish()?;
     let summary = report.summary(req.csv.as_deref())?;
     match req.csv {
