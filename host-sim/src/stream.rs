@@ -7,15 +7,16 @@
 //!   values reach `cap`), always starting with the first. A run shorter than `cap` is
 //!   plotted exactly.
 
-use std::collections::VecDeque;
-
 /// Most points one plotted series keeps ([`Decimator`]); longer series are decimated.
 pub const PLOT_MAX_POINTS: usize = 50_000;
 
-/// The last `cap` values of a stream, in order.
+/// The last `cap` values of a stream, in order: a ring buffer (a push is a store and an
+/// index step, no allocation once full).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tail<T> {
-    buf: VecDeque<T>,
+    buf: Vec<T>,
+    /// Where the oldest value is once the ring is full (the next to be overwritten).
+    head: usize,
     cap: usize,
     seen: u64,
 }
@@ -24,37 +25,54 @@ impl<T> Tail<T> {
     /// Keep the last `cap` values.
     pub fn new(cap: usize) -> Self {
         Self {
-            buf: VecDeque::with_capacity(cap.min(1 << 16)),
+            buf: Vec::with_capacity(cap.min(1 << 16)),
+            head: 0,
             cap,
             seen: 0,
         }
     }
 
     /// Add a value.
+    #[inline]
     pub fn push(&mut self, v: T) {
         self.seen += 1;
-        if self.cap == 0 {
-            return;
+        if self.buf.len() < self.cap {
+            self.buf.push(v);
+        } else if self.cap > 0 {
+            self.buf[self.head] = v;
+            self.head += 1;
+            if self.head == self.cap {
+                self.head = 0;
+            }
         }
-        if self.buf.len() == self.cap {
-            self.buf.pop_front();
-        }
-        self.buf.push_back(v);
     }
 
-    /// The kept values, oldest first.
+    /// The kept values, oldest first (puts the ring in order first).
     pub fn as_slice(&mut self) -> &[T] {
-        self.buf.make_contiguous()
+        self.buf.rotate_left(self.head);
+        self.head = 0;
+        &self.buf
     }
 
     /// Iterate over the kept values, oldest first.
     pub fn iter(&self) -> impl DoubleEndedIterator<Item = &T> + ExactSizeIterator {
-        self.buf.iter()
+        let (newer, older) = self.buf.split_at(self.head);
+        // an ExactSizeIterator over both halves, oldest first
+        (0..self.buf.len()).map(move |i| {
+            if i < older.len() {
+                &older[i]
+            } else {
+                &newer[i - older.len()]
+            }
+        })
     }
 
     /// The newest value.
     pub fn last(&self) -> Option<&T> {
-        self.buf.back()
+        match self.head {
+            0 => self.buf.last(),
+            h => self.buf.get(h - 1),
+        }
     }
 
     /// How many values were pushed in all.
@@ -149,8 +167,23 @@ mod tests {
         for i in 0..10 {
             t.push(i);
         }
-        assert_eq!(t.as_slice(), &[7, 8, 9]);
+        assert_eq!(t.iter().copied().collect::<Vec<_>>(), [7, 8, 9]);
+        assert_eq!(t.iter().rev().copied().collect::<Vec<_>>(), [9, 8, 7]);
         assert_eq!((t.seen(), t.len(), t.last()), (10, 3, Some(&9)));
+        assert_eq!(t.as_slice(), &[7, 8, 9]);
+        t.push(10);
+        assert_eq!(t.last(), Some(&10));
+        assert_eq!(t.as_slice(), &[8, 9, 10]);
+        for n in 0..12 {
+            let mut r = Tail::new(4);
+            for i in 0..n {
+                r.push(i);
+            }
+            let want: Vec<i32> = (0.max(n - 4)..n).collect();
+            assert_eq!(r.iter().copied().collect::<Vec<_>>(), want, "{n}");
+            assert_eq!(r.last().copied(), want.last().copied(), "{n}");
+            assert_eq!(r.as_slice(), want.as_slice(), "{n}");
+        }
         let mut short = Tail::new(5);
         short.push(1.0);
         assert_eq!(short.as_slice(), &[1.0]);

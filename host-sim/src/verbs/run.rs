@@ -54,7 +54,8 @@ pub fn run<S: System>(file: &SceneFile, req: &RunRequest) -> Result<(), Failure>
         plot: req.plot.is_some(),
         progress: !req.json,
     };
-    let mut rows = |row: &S::Row| {
+    let keeps_rows = trace.is_some() || plots.is_some();
+    let mut record = |row: &S::Row| {
         if let Some(t) = trace.as_mut() {
             t.push(row);
         }
@@ -62,9 +63,14 @@ pub fn run<S: System>(file: &SceneFile, req: &RunRequest) -> Result<(), Failure>
             p.push(row);
         }
     };
+    let mut ignore = |_: &S::Row| {};
+    let rows: &mut dyn FnMut(&S::Row) = match keeps_rows {
+        true => &mut record,
+        false => &mut ignore,
+    };
     let outcome = match &req.hil {
-        None => S::run(&cfg, None, &setup, &mut rows)?,
-        Some(h) => run_on_target::<S>(&cfg, h, &setup, &mut rows)?,
+        None => S::run(&cfg, None, &setup, rows)?,
+        Some(h) => run_on_target::<S>(&cfg, h, &setup, rows)?,
     };
     if let Some(t) = trace {
         t.commit()?;
