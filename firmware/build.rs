@@ -14,7 +14,10 @@ fn main() {
     let mut memory = std::fs::read_to_string(&source).expect("firmware/memory.x");
     if std::env::var_os("CARGO_FEATURE_BENCH").is_some() {
         let product = "FLASH : ORIGIN = 0x00000000, LENGTH = 32K";
-        assert!(memory.contains(product), "memory.x: no `{product}` line to widen for bench");
+        assert!(
+            memory.contains(product),
+            "memory.x: no `{product}` line to widen for bench"
+        );
         memory = memory.replace(product, "FLASH : ORIGIN = 0x00000000, LENGTH = 64K");
     }
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("set by cargo"));

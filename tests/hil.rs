@@ -907,36 +907,77 @@ fn bench_figures() {
     }
 }
 
+/// CPU time (user, system) and voluntary context switches of a process so far, from /proc.
+fn cpu_of(pid: &str) -> (f64, f64, u64) {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    let fields: Vec<&str> = stat.rsplit(") ").next().unwrap_or("").split(' ').collect();
+    let tick = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(0.0)
+            / 100.0
+    };
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+    let switches = status
+        .lines()
+        .find_map(|l| l.strip_prefix("voluntary_ctxt_switches:"))
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(0);
+    // after "pid (comm) ", utime and stime are fields 12 and 13 (0-based)
+    (tick(11), tick(12), switches)
+}
+
+/// One lock-step run of the line juggler: steps per wall second, and per step the CPU
+/// microseconds of QEMU and of this process (user + system) and their context switches.
+fn speed_run(steps: u32) -> (f64, String) {
+    let params = ControllerParams::default();
+    let opts = HilOptions {
+        timeout: Duration::from_secs(20),
+        ..options(LinkKind::Semihosting)
+    };
+    let mut hil = LockStep::<Controller>::start(params, opts).expect("start");
+    let qemu = hil.qemu_pid().to_string();
+    let (q0, h0) = (cpu_of(&qemu), cpu_of("self"));
+    let mut plant = BallPaddle::new(&params, 1.2);
+    run_plant(&mut hil, &mut plant, &params, steps);
+    let (q1, h1) = (cpu_of(&qemu), cpu_of("self"));
+    let rate = hil.finish().expect("end").steps_per_wall_second;
+    let us = |a: f64, b: f64| (b - a) * 1e6 / f64::from(steps);
+    let per = |a: u64, b: u64| (b - a) as f64 / f64::from(steps);
+    let detail = format!(
+        "{rate:.0} steps/s; per step: QEMU {:.1} us user + {:.1} us sys, {:.2} switches; \
+         host {:.1} us user + {:.1} us sys, {:.2} switches",
+        us(q0.0, q1.0),
+        us(q0.1, q1.1),
+        per(q0.2, q1.2),
+        us(h0.0, h1.0),
+        us(h0.1, h1.1),
+        per(h0.2, h1.2),
+    );
+    (rate, detail)
+}
+
 /// Lock-step speed over semihosting (issue 13: at least 50k steps per wall second, median
-/// of 3 runs): `cargo test -p dexter-tests --test hil --release -- --ignored --nocapture
-/// lockstep_speed`. Timing is a benchmark, not a test: it never fails on speed.
+/// of 3 runs), with where the time goes: `cargo test -p dexter-tests --test hil --release
+/// -- --ignored --nocapture --test-threads 1 lockstep_speed`. Timing is a benchmark, not
+/// a test: it never fails on speed.
 #[test]
 #[ignore = "benchmark: lock-step steps per wall second, median of 3 runs"]
 fn lockstep_speed() {
     let steps = 20_000;
-    let mut line = Vec::new();
-    let mut echo = Vec::new();
-    for _ in 0..3 {
-        let params = ControllerParams::default();
-        let opts = HilOptions {
-            timeout: Duration::from_secs(20),
-            ..options(LinkKind::Semihosting)
-        };
-        let mut hil = LockStep::<Controller>::start(params, opts).expect("start");
-        let mut plant = BallPaddle::new(&params, 1.2);
-        run_plant(&mut hil, &mut plant, &params, steps);
-        line.push(hil.finish().expect("end").steps_per_wall_second);
-        let report = bench_echo(&firmware(), steps);
-        echo.push(report);
+    let mut rates = Vec::new();
+    for run in 0..3 {
+        let (rate, detail) = speed_run(steps);
+        println!("Line, semihosting, run {run}: {detail}");
+        rates.push(rate);
     }
-    line.sort_by(f64::total_cmp);
+    rates.sort_by(f64::total_cmp);
     println!(
-        "Line, semihosting, {steps} steps x 3: {line:.0?} steps per wall second, median {:.0}",
-        line[1]
+        "Line, semihosting, {steps} steps x 3: median {:.0} steps per wall second",
+        rates[1]
     );
-    for e in echo {
-        println!("{e}");
-    }
+    println!("{}", bench_echo(&firmware(), steps));
 }
 
 // ---- raw protocol sessions over UART0 (free-running mode, refusals) ---------------------

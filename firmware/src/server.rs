@@ -90,6 +90,8 @@ pub struct Server<L, T> {
     last_seq: u32,
     missed: u32,
     stats: RunStats,
+    /// The answer being sent (kept here so it is not zeroed on every send).
+    tx: [u8; MAX_FRAME_LEN],
 }
 
 impl<L, T> Server<L, T>
@@ -106,6 +108,7 @@ where
             controller: None,
             last_seq: 0,
             missed: 0,
+            tx: [0; MAX_FRAME_LEN],
             stats: RunStats {
                 step_instructions_min: u32::MAX,
                 ..RunStats::default()
@@ -258,12 +261,11 @@ where
     }
 
     fn send(&mut self, message: &DeviceMessage) -> Option<Exit> {
-        let mut out = [0u8; MAX_FRAME_LEN];
-        let Ok(n) = encode(message, &mut out) else {
+        let Ok(n) = encode(message, &mut self.tx) else {
             defmt::error!("reply does not fit a frame");
             return Some(Exit::LinkFailed);
         };
-        write_all(&mut self.link, out.get(..n).unwrap_or(&[])).err()
+        write_all(&mut self.link, self.tx.get(..n).unwrap_or(&[])).err()
     }
 }
 

@@ -50,8 +50,11 @@ pub const MAX_PAYLOAD_LEN: usize = 256;
 pub const CRC_LEN: usize = 4;
 /// The largest encoded frame: COBS of payload and CRC, plus the `0x00` delimiter, bytes.
 pub const MAX_FRAME_LEN: usize = cobs::max_encoding_length(MAX_PAYLOAD_LEN + CRC_LEN) + 1;
-/// Length of the controller-defined estimate in [`Telemetry::estimate`].
-pub const ESTIMATE_LEN: usize = 6;
+/// Length of the controller-defined estimate in [`Telemetry::estimate`]: the main state of
+/// each kind (the line juggler's ball height and velocity; a planar body's pose; a hopper's
+/// leg length, velocity and phase). Every slot costs 4 bytes in every `Output` frame, on a
+/// real UART too, so it is kept small.
+pub const ESTIMATE_LEN: usize = 3;
 
 const CRC32C: Crc<u32> = Crc::<u32>::new(&CRC_32_ISCSI);
 
