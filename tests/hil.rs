@@ -907,7 +907,8 @@ fn bench_figures() {
     }
 }
 
-/// CPU time (user, system) and voluntary context switches of a process so far, from /proc.
+/// CPU time (user, system) and voluntary context switches (all threads) of a process so
+/// far, from /proc.
 fn cpu_of(pid: &str) -> (f64, f64, u64) {
     let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
     let fields: Vec<&str> = stat.rsplit(") ").next().unwrap_or("").split(' ').collect();
@@ -918,12 +919,20 @@ fn cpu_of(pid: &str) -> (f64, f64, u64) {
             .unwrap_or(0.0)
             / 100.0
     };
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
-    let switches = status
-        .lines()
-        .find_map(|l| l.strip_prefix("voluntary_ctxt_switches:"))
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(0);
+    // context switches of every thread (QEMU's vCPU thread is not its main thread)
+    let tasks = std::fs::read_dir(format!("/proc/{pid}/task"))
+        .into_iter()
+        .flatten();
+    let switches = tasks
+        .flatten()
+        .filter_map(|t| std::fs::read_to_string(t.path().join("status")).ok())
+        .filter_map(|status| {
+            status
+                .lines()
+                .find_map(|l| l.strip_prefix("voluntary_ctxt_switches:"))
+                .and_then(|v| v.trim().parse::<u64>().ok())
+        })
+        .sum();
     // after "pid (comm) ", utime and stime are fields 12 and 13 (0-based)
     (tick(11), tick(12), switches)
 }
