@@ -5,7 +5,7 @@
 //! -machine mps2-an386` with `-icount shift=10` (one target instruction = 1.024 us of
 //! virtual time, so the firmware's SysTick measurements are exact and repeatable),
 //! configures it with `HostMessage::Configure(C::config(params))` and then, for every
-//! [`StepController::step`], sends the frame, waits for the firmware's `Output`, steps a
+//! [`StepController::step`](crate::controller::StepController::step), sends the frame, waits for the firmware's `Output`, steps a
 //! shadow `C` (the same code [`crate::controller::Sil`] runs) with the same input and
 //! compares the two commands bit for bit (`Reply::bit_identical`). The command returned is
 //! the firmware's.
