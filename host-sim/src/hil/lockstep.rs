@@ -19,6 +19,24 @@ use std::time::{Duration, Instant};
 /// How long one wait for bytes lasts before checking that QEMU still runs.
 const WAIT_SLICE: Duration = Duration::from_millis(50);
 
+/// The answer a wait is for (formatted only into an error: no allocation per frame).
+#[derive(Clone, Copy, Debug)]
+enum Awaited {
+    Configured,
+    Output(u32),
+    Stopped,
+}
+
+impl std::fmt::Display for Awaited {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Awaited::Configured => f.write_str("the answer to Configure"),
+            Awaited::Output(seq) => write!(f, "the answer to frame {seq}"),
+            Awaited::Stopped => f.write_str("the answer to Stop"),
+        }
+    }
+}
+
 /// The firmware in QEMU, stepped in lock-step with the plant, running a controller of kind
 /// `C` and checked against a shadow `C` on the host, bit for bit.
 pub struct LockStep<C: Wire = Controller> {
@@ -91,7 +109,7 @@ impl<C: Wire> LockStep<C> {
     fn configure(&mut self, params: C::Params) -> Result<(), ControllerError> {
         self.send_clean(&HostMessage::Configure(C::config(params)))?;
         let kind = C::KIND;
-        match self.next_message("the answer to Configure")? {
+        match self.next_message(Awaited::Configured)? {
             DeviceMessage::Configured { kind: k, ok: true } if k == kind => Ok(()),
             DeviceMessage::Configured { ok: false, .. } => Err(link_err(format!(
                 "the firmware rejected the {kind:?} controller's parameters \
@@ -134,7 +152,7 @@ impl<C: Wire> LockStep<C> {
     }
 
     /// The next message from the firmware, waiting up to the timeout.
-    fn next_message(&mut self, waiting_for: &str) -> Result<DeviceMessage, ControllerError> {
+    fn next_message(&mut self, waiting_for: Awaited) -> Result<DeviceMessage, ControllerError> {
         let deadline = Instant::now() + self.opts.timeout;
         loop {
             if let Some(m) = self.replies.pop_front() {
@@ -145,7 +163,7 @@ impl<C: Wire> LockStep<C> {
     }
 
     /// Receive bytes until some arrive or `deadline`, decoding answers into `replies`.
-    fn pump(&mut self, deadline: Instant, waiting_for: &str) -> Result<(), ControllerError> {
+    fn pump(&mut self, deadline: Instant, waiting_for: Awaited) -> Result<(), ControllerError> {
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
             match self.link.receive(left.min(WAIT_SLICE)) {
@@ -183,8 +201,7 @@ impl<C: Wire> LockStep<C> {
 
     /// The firmware's `Output` answering sequence number `seq`.
     fn next_output(&mut self, seq: u32) -> Result<StepOutput<C::Command>, ControllerError> {
-        let what = format!("the answer to frame {seq}");
-        match self.next_message(&what)? {
+        match self.next_message(Awaited::Output(seq))? {
             DeviceMessage::Output { command, telemetry } => match C::command_of(&command) {
                 Some(command) => Ok(StepOutput { command, telemetry }),
                 None => Err(link_err(format!(
@@ -335,7 +352,7 @@ impl<C: Wire> LockStep<C> {
     pub fn finish_with_summary(mut self) -> Result<(HilReport, RunSummary), ControllerError> {
         self.send_clean(&HostMessage::Stop)?;
         let summary = loop {
-            match self.next_message("the answer to Stop")? {
+            match self.next_message(Awaited::Stopped)? {
                 DeviceMessage::Stopped(summary) => break summary,
                 DeviceMessage::Output { .. } => {} // an answer to a flushed partial frame
                 other => {
