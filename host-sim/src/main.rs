@@ -309,7 +309,7 @@ fn run_hil(scene: &Scene, options: &RunOptions, args: &RunArgs) -> Result<RunOut
         };
     }
     if let Some(b) = args.budget {
-        opts.instruction_budget = (b > 0).then_some(b);
+        opts.instruction_budget = (b > 0).then_some(b).into();
     }
     if let Some(r) = args.corrupt_rate {
         if !(0.0..=1.0).contains(&r) {
