@@ -1,13 +1,28 @@
-//! Puts the workspace's top-level `memory.x` on the linker search path (cortex-m-rt's
-//! `link.x` includes it).
+//! Puts `firmware/memory.x` on the linker search path (cortex-m-rt's `link.x` includes
+//! it), through a copy in `OUT_DIR`. (It is not at the workspace root: rustc links with the
+//! workspace root as its working directory, where the linker would find it first.)
+//!
+//! `memory.x` cuts flash to the product's 32 KiB budget, so the linker refuses an image
+//! that does not fit. The `bench` feature builds a measurement tool, not the product (it
+//! links the math kernels under test, libm's `sinf` among them, ~36 KiB): for it alone the
+//! copy gets 64 KiB of flash. The RAM split (stack and statics) is the same for both.
 use std::path::PathBuf;
 
 fn main() {
-    let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap())
-        .parent()
-        .unwrap()
-        .to_path_buf();
-    println!("cargo:rustc-link-search={}", root.display());
-    println!("cargo:rerun-if-changed={}", root.join("memory.x").display());
+    let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("set by cargo"));
+    let source = manifest.join("memory.x");
+    let mut memory = std::fs::read_to_string(&source).expect("firmware/memory.x");
+    if std::env::var_os("CARGO_FEATURE_BENCH").is_some() {
+        let product = "FLASH : ORIGIN = 0x00000000, LENGTH = 32K";
+        assert!(
+            memory.contains(product),
+            "memory.x: no `{product}` line to widen for bench"
+        );
+        memory = memory.replace(product, "FLASH : ORIGIN = 0x00000000, LENGTH = 64K");
+    }
+    let out = PathBuf::from(std::env::var("OUT_DIR").expect("set by cargo"));
+    std::fs::write(out.join("memory.x"), memory).expect("write memory.x to OUT_DIR");
+    println!("cargo:rustc-link-search={}", out.display());
+    println!("cargo:rerun-if-changed={}", source.display());
     println!("cargo:rerun-if-changed=build.rs");
 }

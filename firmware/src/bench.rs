@@ -1,6 +1,7 @@
 //! Per-call instruction counts of the math kernels the core can use (feature `bench`,
 //! boot word `bench`): `libm::sinf`, `micromath` `sin`, `dexter_core::math::sin_poly_f32`,
-//! `libm::sqrtf`, measured with the same SysTick/icount method as the control step.
+//! `libm::sqrtf`, measured with the same SysTick/icount method as the control step; where
+//! the control step's instructions go; and what the wire protocol costs per frame.
 
 use crate::board::{StepTimer, SysTickInstructions};
 use core::hint::black_box;
@@ -63,7 +64,49 @@ pub fn run(timer: &SysTickInstructions) -> bool {
         );
     }
     step_breakdown(timer);
+    protocol_costs(timer);
     true
+}
+
+/// Instructions the firmware spends on the wire protocol per lock-step period: decoding
+/// the host's sensor frame byte by byte (COBS, CRC-32C, postcard) and encoding its answer,
+/// for each controller kind; and the CRC alone per byte.
+pub fn protocol_costs(timer: &SysTickInstructions) {
+    use dexter_core::protocol::{
+        encode, Command, DeviceMessage, Frame, FrameDecoder, HostMessage, Kind, Telemetry,
+        MAX_FRAME_LEN,
+    };
+    for &kind in Kind::ALL {
+        let sensor = HostMessage::Sensor(Frame::default_for(kind));
+        let mut frame = [0u8; MAX_FRAME_LEN];
+        let n = encode(&sensor, &mut frame).unwrap_or(0);
+        let mut decoder = FrameDecoder::<MAX_FRAME_LEN>::new();
+        let body = frame.get(..n.saturating_sub(1)).unwrap_or(&[]);
+        let (_, bytes) = timer.measure(|| {
+            let mut completed = 0u32;
+            for &b in black_box(body) {
+                completed += u32::from(decoder.push::<HostMessage>(b).is_some());
+            }
+            completed
+        });
+        let (_, delimiter) = timer.measure(|| decoder.push::<HostMessage>(0));
+        let answer = DeviceMessage::Output {
+            command: Command::default_for(kind),
+            telemetry: Telemetry::default(),
+        };
+        let mut out = [0u8; MAX_FRAME_LEN];
+        let (m, encode_cost) = timer.measure(|| encode(black_box(&answer), &mut out).unwrap_or(0));
+        defmt::info!(
+            "bench protocol {}: decode sensor frame ({=usize} B) {=u32} instructions ({=u32} for the bytes, {=u32} at the delimiter: CRC, postcard, result), encode output ({=usize} B) {=u32} instructions",
+            kind,
+            n,
+            bytes + delimiter,
+            bytes,
+            delimiter,
+            m,
+            encode_cost
+        );
+    }
 }
 
 /// Where the control step's instructions go: the Track-mode pipeline of

@@ -2,9 +2,9 @@
 //!
 //! The shared control core ([`dexter_core`]) on a Cortex-M4F. The board layer is thin
 //! ([`board`]): a byte link that implements `embedded_io::{Read, Write}` and a step timer
-//! ([`board::StepTimer`]). Everything else — the lock-step protocol server ([`server`]),
-//! the smoke run ([`smoke`]) and the math benchmarks (`bench`, feature `bench`) — is board
-//! independent.
+//! ([`board::StepTimer`]). Everything else — the protocol server ([`server`]) and the
+//! controllers it hosts ([`hosted`]), the smoke run ([`smoke`]), the stack measurement
+//! ([`stack`]) and the math benchmarks (`bench`, feature `bench`) — is board independent.
 //!
 //! This file holds what every binary needs (knurling app-template style): the defmt global
 //! logger (semihosting), the panic handler and a `HardFault` handler that both end a QEMU
@@ -18,10 +18,12 @@ use defmt_semihosting as _; // global logger: defmt frames on semihosting stdout
 #[cfg(feature = "bench")]
 pub mod bench;
 pub mod board;
+pub mod hosted;
 pub mod link;
 pub mod ring;
 pub mod server;
 pub mod smoke;
+pub mod stack;
 
 /// End the run: semihosting `SYS_EXIT` (QEMU exits with status 0 on success, 1 on failure).
 /// On a real board without a debugger attached this parks the core instead.

@@ -142,8 +142,6 @@ pub fn command_line(buf: &mut [u8]) -> &[u8] {
     if r != 0 {
         return &[];
     }
-    let len = block[1].min(buf.len());
-    let s = &buf[..len];
-    let end = s.iter().position(|&b| b == 0).unwrap_or(s.len());
-    &buf[..end]
+    let line = buf.get(..block[1]).unwrap_or(&[]);
+    line.split(|&b| b == 0).next().unwrap_or(&[])
 }

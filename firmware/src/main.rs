@@ -4,8 +4,9 @@
 //! - `uart`: lock-step server on UART0;
 //! - `freerun`: free-running fixed-rate mode on UART0 (500 Hz on SysTick, link timeout
 //!   after 5 periods without a valid frame), the loop a real board runs;
-//! - `fault-panic`, `fault-hardfault`: test hooks that panic or execute `udf`, to check that
-//!   both end the QEMU run with a failure status;
+//! - `fault-panic`, `fault-hardfault`, `fault-stack-overflow`: test hooks that panic,
+//!   execute `udf`, or recurse past the reserved stack, to check that each ends the QEMU run
+//!   with a failure status;
 //! - `bench` (feature `bench`): per-call instruction counts of the math kernels.
 #![no_std]
 #![no_main]
@@ -71,6 +72,7 @@ enum BootMode {
     FreeRunning,
     FaultPanic,
     FaultHardFault,
+    FaultStackOverflow,
     Bench,
 }
 
@@ -85,6 +87,7 @@ fn boot_mode() -> BootMode {
             b"freerun" => mode = BootMode::FreeRunning,
             b"fault-panic" => mode = BootMode::FaultPanic,
             b"fault-hardfault" => mode = BootMode::FaultHardFault,
+            b"fault-stack-overflow" => mode = BootMode::FaultStackOverflow,
             b"bench" => mode = BootMode::Bench,
             _ => {}
         }
@@ -112,7 +115,7 @@ fn main() -> ! {
         BootMode::Smoke => exit(smoke::run(&timer)),
         BootMode::Semihosting | BootMode::Uart => {
             let link = if mode == BootMode::Uart {
-                PlantLink::Uart(mps2_an386::Uart0::new(&mut cp.NVIC))
+                uart(&mut cp.NVIC)
             } else {
                 let Ok(link) = SemihostingLink::open() else {
                     defmt::error!("cannot open the semihosting link files");
@@ -125,8 +128,7 @@ fn main() -> ! {
             exit_of(e, server.stats())
         }
         BootMode::FreeRunning => {
-            let uart = PlantLink::Uart(mps2_an386::Uart0::new(&mut cp.NVIC));
-            let mut server = Server::new(uart, timer);
+            let mut server = Server::new(uart(&mut cp.NVIC), timer);
             let mode = FreeRunning {
                 period_ticks: mps2_an386::SYSTICK_HZ / FREE_RUNNING_RATE_HZ,
                 timeout_periods: FREE_RUNNING_TIMEOUT_PERIODS,
@@ -136,6 +138,11 @@ fn main() -> ! {
         }
         BootMode::FaultPanic => panic!("fault-panic test hook"),
         BootMode::FaultHardFault => cortex_m::asm::udf(),
+        BootMode::FaultStackOverflow => {
+            let depth = recurse(u32::MAX);
+            defmt::error!("recursed {=u32} frames without a fault", depth);
+            exit(false)
+        }
         BootMode::Bench => {
             #[cfg(feature = "bench")]
             exit(dexter_firmware::bench::run(&timer));
@@ -146,6 +153,27 @@ fn main() -> ! {
             }
         }
     }
+}
+
+/// UART0 as the plant link (taken once: the board has one receive ring).
+fn uart(nvic: &mut cortex_m::peripheral::NVIC) -> PlantLink {
+    match mps2_an386::Uart0::new(nvic) {
+        Some(uart) => PlantLink::Uart(uart),
+        None => {
+            defmt::error!("UART0 was taken twice");
+            exit(false)
+        }
+    }
+}
+
+/// Test hook: recursion with a 256-byte frame per call, until the stack overflows.
+#[inline(never)]
+fn recurse(depth: u32) -> u32 {
+    let frame = core::hint::black_box([depth as u8; 256]);
+    if depth == 0 {
+        return u32::from(frame[0]);
+    }
+    recurse(depth - 1).wrapping_add(u32::from(core::hint::black_box(frame)[255]))
 }
 
 /// Device interrupts (cortex-m-rt without a device crate routes them all here).

@@ -1,8 +1,14 @@
 //! A fixed-capacity single-producer single-consumer byte ring: the UART receive interrupt
 //! pushes, the main loop pops. Lock free (two atomic indices), no allocation.
+//!
+//! The single-producer, single-consumer contract is in the types: the ring itself offers
+//! no way to push or pop. [`ByteRing::split`] hands out the one [`Producer`] and the one
+//! [`Consumer`], once (a second call returns `None`); neither handle is `Clone`, and each
+//! operation takes `&mut self`, so there is exactly one writer of the tail index and one
+//! of the head index, whatever the caller does.
 
 use core::cell::UnsafeCell;
-use core::sync::atomic::{AtomicUsize, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// SPSC byte ring with `N` slots (`N` a power of two; one slot is kept free).
 pub struct ByteRing<const N: usize> {
@@ -10,10 +16,14 @@ pub struct ByteRing<const N: usize> {
     head: AtomicUsize,
     tail: AtomicUsize,
     dropped: AtomicUsize,
+    split: AtomicBool,
 }
 
-// Safety: one producer (the ISR) writes slots between tail and head-1 only, one consumer
-// (the main loop) reads slots between head and tail only; the indices are atomics.
+// Safety: the buffer is only reached through the one `Producer` and the one `Consumer` that
+// `split` hands out once (both need `&mut self`). The producer writes slot `tail` only,
+// before publishing it with a release store of `tail`; the consumer reads slot `head` only,
+// after an acquire load of `tail` shows it published, and frees it with a release store of
+// `head`. No slot is ever accessed from both sides at once.
 unsafe impl<const N: usize> Sync for ByteRing<N> {}
 
 impl<const N: usize> Default for ByteRing<N> {
@@ -35,42 +45,75 @@ impl<const N: usize> ByteRing<N> {
             head: AtomicUsize::new(0),
             tail: AtomicUsize::new(0),
             dropped: AtomicUsize::new(0),
+            split: AtomicBool::new(false),
         }
     }
 
-    /// Producer side: append a byte; counts it as dropped when the ring is full.
-    pub fn push(&self, byte: u8) {
-        let tail = self.tail.load(Ordering::Relaxed);
-        let next = (tail + 1) & Self::MASK;
-        if next == self.head.load(Ordering::Acquire) {
-            self.dropped.fetch_add(1, Ordering::Relaxed);
-            return;
-        }
-        // Safety: slot `tail` is owned by the producer until `tail` is published.
-        unsafe { (*self.buf.get())[tail] = byte };
-        self.tail.store(next, Ordering::Release);
-    }
-
-    /// Consumer side: take the oldest byte.
-    pub fn pop(&self) -> Option<u8> {
-        let head = self.head.load(Ordering::Relaxed);
-        if head == self.tail.load(Ordering::Acquire) {
+    /// The producer and consumer ends; `None` if they were handed out before.
+    pub fn split(&self) -> Option<(Producer<'_, N>, Consumer<'_, N>)> {
+        if self.split.swap(true, Ordering::AcqRel) {
             return None;
         }
-        // Safety: slot `head` was published by the producer and is not written until
-        // `head` moves past it.
-        let byte = unsafe { (*self.buf.get())[head] };
-        self.head.store((head + 1) & Self::MASK, Ordering::Release);
-        Some(byte)
+        Some((Producer { ring: self }, Consumer { ring: self }))
     }
 
-    /// Whether a byte is waiting.
-    pub fn is_empty(&self) -> bool {
-        self.head.load(Ordering::Acquire) == self.tail.load(Ordering::Acquire)
+    /// Pointer to slot `index & MASK` (always inside the buffer).
+    fn slot(&self, index: usize) -> *mut u8 {
+        self.buf.get().cast::<u8>().wrapping_add(index & Self::MASK)
     }
 
     /// Bytes lost because the ring was full.
     pub fn dropped(&self) -> usize {
         self.dropped.load(Ordering::Relaxed)
+    }
+}
+
+/// The writing end (the receive interrupt).
+pub struct Producer<'a, const N: usize> {
+    ring: &'a ByteRing<N>,
+}
+
+impl<const N: usize> Producer<'_, N> {
+    /// Append a byte; counts it as dropped when the ring is full.
+    pub fn push(&mut self, byte: u8) {
+        let ring = self.ring;
+        let tail = ring.tail.load(Ordering::Relaxed);
+        let next = (tail + 1) & ByteRing::<N>::MASK;
+        if next == ring.head.load(Ordering::Acquire) {
+            ring.dropped.fetch_add(1, Ordering::Relaxed);
+            return;
+        }
+        // Safety: `tail & MASK < N`, so the pointer is in the buffer; that one slot is the
+        // producer's until `tail` is published (see `Sync`). Only the slot is accessed, never
+        // the whole array, so the consumer's concurrent read of another slot does not alias.
+        unsafe { ring.slot(tail).write(byte) };
+        ring.tail.store(next, Ordering::Release);
+    }
+}
+
+/// The reading end (the main loop).
+pub struct Consumer<'a, const N: usize> {
+    ring: &'a ByteRing<N>,
+}
+
+impl<const N: usize> Consumer<'_, N> {
+    /// Take the oldest byte.
+    pub fn pop(&mut self) -> Option<u8> {
+        let ring = self.ring;
+        let head = ring.head.load(Ordering::Relaxed);
+        if head == ring.tail.load(Ordering::Acquire) {
+            return None;
+        }
+        // Safety: `head & MASK < N`, so the pointer is in the buffer; slot `head` was
+        // published by the producer and is not written until `head` moves past it.
+        let byte = unsafe { ring.slot(head).read() };
+        ring.head
+            .store((head + 1) & ByteRing::<N>::MASK, Ordering::Release);
+        Some(byte)
+    }
+
+    /// Whether no byte is waiting.
+    pub fn is_empty(&self) -> bool {
+        self.ring.head.load(Ordering::Relaxed) == self.ring.tail.load(Ordering::Acquire)
     }
 }

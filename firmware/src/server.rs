@@ -1,37 +1,47 @@
-//! The lock-step protocol server: the firmware's main loop, generic over the plant link
-//! (`embedded_io::{Read, Write}`) and the [`StepTimer`].
+//! The protocol server: the firmware's main loop, generic over the plant link
+//! (`embedded_io::{Read, Write}`) and the [`StepTimer`], for every hosted controller kind
+//! ([`Hosted`]).
 //!
 //! In lock-step the host owns time: it sends one [`HostMessage::Sensor`] frame per control
 //! period and waits for the answer, so "fixed rate" means one control step per received
 //! frame, and the link clock is the frame stream itself: every frame delimiter the
 //! firmware receives is one control period. A period whose frame is rejected (CRC,
 //! framing, overlong, payload) is a period without a valid frame; after
-//! [`LOCKSTEP_TIMEOUT_PERIODS`] such periods the firmware answers with the core's safe
-//! command, `Controller::safe(seq, Fault::LinkTimeout)`, where `seq` continues the last
-//! valid sequence number. A rejected frame's bytes never reach the controller. Every
-//! non-empty frame therefore gets exactly one answer (until the timeout is reached), which
-//! lets the host predict the answers from the bytes it sent.
+//! [`LOCKSTEP_TIMEOUT_PERIODS`] such periods the firmware answers with the configured
+//! controller's safe command, `safe(seq, Fault::LinkTimeout)`, where `seq` continues the
+//! last valid sequence number. A rejected frame's bytes never reach the controller.
+//!
+//! Every non-empty frame gets exactly one answer (until the timeout is reached), which lets
+//! the host predict the answers from the bytes it sent:
+//!
+//! | frame | answer |
+//! | --- | --- |
+//! | `Configure` | `Configured { kind, ok }`, or `Rejected(NotHosted)` |
+//! | `Sensor` of the configured kind | `Output` (the control step) |
+//! | `Sensor` of another kind | `Rejected(WrongKind)`; the controller is not stepped |
+//! | `Sensor` before any accepted `Configure` | `Rejected(NotConfigured)` |
+//! | rejected by the link, controller configured | `Output` with the safe command |
+//! | rejected by the link, none configured | `Rejected(Undecodable)` |
+//! | `Stop` | `Stopped` (steps, stack high-water), then the run ends |
 //!
 //! A free-running board (no host in lock-step) instead steps on its own timer and counts
-//! the link timeout in SysTick periods; see firmware/README.md.
+//! the link timeout in timer periods ([`FreeRunning`]); see firmware/README.md.
+//!
+//! Nothing here panics on any input: reads are bounded by the buffer, and writes go through
+//! [`write_all`], which turns a link that stops accepting bytes into [`Exit::LinkFailed`].
 
 use crate::board::StepTimer;
-use dexter_core::control::Controller;
+use crate::hosted::Hosted;
 use dexter_core::protocol::{
-    encode, ActuatorCommand, DecodeError, DeviceMessage, Fault, FrameDecoder, HostMessage,
-    Telemetry, MAX_FRAME_LEN,
+    encode, Command, Config, DecodeError, DeviceMessage, Fault, Frame, FrameDecoder, HostMessage,
+    Rejection, RunSummary, Telemetry, MAX_FRAME_LEN,
 };
 
 /// Control periods without a valid frame after which the firmware answers with the safe
 /// command (lock-step: one period per received frame).
 pub const LOCKSTEP_TIMEOUT_PERIODS: u32 = 1;
-
-/// Measure `f` with interrupts masked, so a receive interrupt that lands inside the
-/// window is not counted as part of the control step (it runs right after).
-#[inline(always)]
-fn measure_masked<T: StepTimer, R>(timer: &T, f: impl FnOnce() -> R) -> (R, u32) {
-    cortex_m::interrupt::free(|_| timer.measure(f))
-}
+/// Bytes read from the link at a time.
+const READ_CHUNK: usize = 64;
 
 /// How a server run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -40,14 +50,14 @@ pub enum Exit {
     Stop,
     /// The host closed the link.
     EndOfStream,
-    /// The link reported an error.
+    /// The link reported an error, or accepted no more bytes.
     LinkFailed,
 }
 
 /// Figures a run reports at its end.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, defmt::Format)]
 pub struct RunStats {
-    /// Control steps (`Controller::step`) run.
+    /// Control steps run.
     pub steps: u32,
     /// Safe commands sent because of a link timeout.
     pub link_timeouts: u32,
@@ -59,15 +69,29 @@ pub struct RunStats {
     pub step_instructions_sum: u64,
 }
 
-/// The lock-step server state.
+/// Write all of `bytes`; a link that accepts nothing (`Ok(0)`) or fails is an error. Never
+/// panics (embedded-io's `write_all` panics on `Ok(0)`).
+pub fn write_all<L: embedded_io::Write>(link: &mut L, mut bytes: &[u8]) -> Result<(), Exit> {
+    while !bytes.is_empty() {
+        match link.write(bytes) {
+            Ok(n) if n > 0 => bytes = bytes.get(n..).unwrap_or(&[]),
+            _ => return Err(Exit::LinkFailed),
+        }
+    }
+    Ok(())
+}
+
+/// The server state.
 pub struct Server<L, T> {
     link: L,
     timer: T,
     decoder: FrameDecoder<MAX_FRAME_LEN>,
-    controller: Option<Controller>,
+    controller: Option<Hosted>,
     last_seq: u32,
     missed: u32,
     stats: RunStats,
+    /// The answer being sent (kept here so it is not zeroed on every send).
+    tx: [u8; MAX_FRAME_LEN],
 }
 
 impl<L, T> Server<L, T>
@@ -84,6 +108,7 @@ where
             controller: None,
             last_seq: 0,
             missed: 0,
+            tx: [0; MAX_FRAME_LEN],
             stats: RunStats {
                 step_instructions_min: u32::MAX,
                 ..RunStats::default()
@@ -96,16 +121,16 @@ where
         self.stats
     }
 
-    /// Serve until the host stops the run or the link ends.
+    /// Serve in lock-step until the host stops the run or the link ends.
     pub fn run(&mut self) -> Exit {
-        let mut buf = [0u8; 64];
+        let mut buf = [0u8; READ_CHUNK];
         loop {
             let n = match self.link.read(&mut buf) {
                 Ok(0) => return Exit::EndOfStream,
                 Ok(n) => n,
                 Err(_) => return Exit::LinkFailed,
             };
-            for &byte in &buf[..n] {
+            for &byte in buf.get(..n).unwrap_or(&[]) {
                 if let Some(result) = self.decoder.push::<HostMessage>(byte) {
                     if let Some(exit) = self.handle(result) {
                         return exit;
@@ -115,57 +140,99 @@ where
         }
     }
 
+    /// Answer one frame (see the table in the module docs).
     fn handle(&mut self, result: Result<HostMessage, DecodeError>) -> Option<Exit> {
         match result {
-            Ok(HostMessage::Configure(params)) => {
-                let ok = match Controller::new(params) {
-                    Ok(c) => {
-                        defmt::info!(
-                            "configured: dt_s={=f32} target_apex_m={=f32}",
-                            params.dt_s,
-                            params.target_apex_m
-                        );
-                        self.controller = Some(c);
-                        self.missed = 0;
-                        true
-                    }
-                    Err(e) => {
-                        defmt::warn!("configuration rejected: {}", e);
-                        false
-                    }
-                };
-                self.send(&DeviceMessage::Configured { ok })
-            }
-            Ok(HostMessage::Sensor(frame)) => {
-                let Some(controller) = self.controller.as_mut() else {
-                    defmt::warn!(
-                        "sensor frame {=u32} before configuration: ignored",
-                        frame.seq
-                    );
-                    return None;
-                };
-                let (command, instructions) =
-                    measure_masked(&self.timer, || controller.step(&frame));
-                self.last_seq = frame.seq;
-                self.missed = 0;
-                self.record(instructions);
-                self.output(command, instructions)
-            }
-            Ok(HostMessage::Stop) => Some(Exit::Stop),
-            Err(e) => {
-                defmt::debug!("frame rejected: {}", e);
-                self.missed = self.missed.saturating_add(1);
-                if self.missed < LOCKSTEP_TIMEOUT_PERIODS {
-                    return None;
-                }
-                let seq = self.last_seq.wrapping_add(self.missed);
-                let controller = self.controller.as_mut()?;
-                let (command, instructions) =
-                    measure_masked(&self.timer, || controller.safe(seq, Fault::LinkTimeout));
-                self.stats.link_timeouts = self.stats.link_timeouts.saturating_add(1);
-                self.output(command, instructions)
-            }
+            Ok(HostMessage::Configure(config)) => self.configure(&config),
+            Ok(HostMessage::Sensor(frame)) => match self.check_kind(&frame) {
+                Ok(()) => self.step(&frame),
+                Err(rejection) => self.send(&DeviceMessage::Rejected(rejection)),
+            },
+            Ok(HostMessage::Stop) => self.stop(),
+            Err(e) => self.period_without_frame(e),
         }
+    }
+
+    fn configure(&mut self, config: &Config) -> Option<Exit> {
+        let kind = config.kind();
+        // A refused configuration leaves no controller: the host asked for another one.
+        self.controller = None;
+        let answer = match Hosted::configure(config) {
+            None => {
+                defmt::warn!("controller kind {} is not hosted by this image", kind);
+                DeviceMessage::Rejected(Rejection::NotHosted(kind))
+            }
+            Some(Err(e)) => {
+                defmt::warn!("configuration of {} rejected: {}", kind, e);
+                DeviceMessage::Configured { kind, ok: false }
+            }
+            Some(Ok(controller)) => {
+                defmt::info!("configured: {}", kind);
+                self.controller = Some(controller);
+                self.missed = 0;
+                DeviceMessage::Configured { kind, ok: true }
+            }
+        };
+        self.send(&answer)
+    }
+
+    /// Whether `frame` can be stepped: a controller of its kind is configured.
+    fn check_kind(&self, frame: &Frame) -> Result<(), Rejection> {
+        match &self.controller {
+            None => Err(Rejection::NotConfigured),
+            Some(c) if c.kind() != frame.kind() => Err(Rejection::WrongKind {
+                configured: c.kind(),
+                received: frame.kind(),
+            }),
+            Some(_) => Ok(()),
+        }
+    }
+
+    /// One control step on a frame of the configured kind, answered with its command.
+    fn step(&mut self, frame: &Frame) -> Option<Exit> {
+        let controller = self.controller.as_mut()?;
+        let (command, instructions) = controller.step(frame, &self.timer).ok()?;
+        self.last_seq = command.reply().0;
+        self.missed = 0;
+        self.record(instructions);
+        self.output(command, instructions)
+    }
+
+    /// A period whose frame the link rejected: the safe command after the timeout.
+    fn period_without_frame(&mut self, e: DecodeError) -> Option<Exit> {
+        defmt::debug!("frame rejected: {}", e);
+        let Some(controller) = self.controller.as_mut() else {
+            return self.send(&DeviceMessage::Rejected(Rejection::Undecodable(e)));
+        };
+        self.missed = self.missed.saturating_add(1);
+        if self.missed < LOCKSTEP_TIMEOUT_PERIODS {
+            return None;
+        }
+        let seq = self.last_seq.wrapping_add(self.missed);
+        let (command, instructions) = controller.safe(seq, Fault::LinkTimeout, &self.timer);
+        self.stats.link_timeouts = self.stats.link_timeouts.saturating_add(1);
+        self.output(command, instructions)
+    }
+
+    /// Answer `Stop` with the run's summary and end the run.
+    fn stop(&mut self) -> Option<Exit> {
+        let stack = crate::stack::usage();
+        let summary = RunSummary {
+            steps: self.stats.steps,
+            link_timeouts: self.stats.link_timeouts,
+            stack_used_bytes: stack.used_bytes,
+            stack_size_bytes: stack.size_bytes,
+        };
+        defmt::info!(
+            "stopped after {=u32} steps; stack high-water {=u32} of {=u32} bytes",
+            summary.steps,
+            summary.stack_used_bytes,
+            summary.stack_size_bytes
+        );
+        Some(
+            self.send(&DeviceMessage::Stopped(summary))
+                .unwrap_or(Exit::Stop),
+        )
     }
 
     fn record(&mut self, instructions: u32) {
@@ -173,10 +240,12 @@ where
         s.steps = s.steps.saturating_add(1);
         s.step_instructions_min = s.step_instructions_min.min(instructions);
         s.step_instructions_max = s.step_instructions_max.max(instructions);
-        s.step_instructions_sum += u64::from(instructions);
+        s.step_instructions_sum = s
+            .step_instructions_sum
+            .saturating_add(u64::from(instructions));
     }
 
-    fn output(&mut self, command: ActuatorCommand, instructions: u32) -> Option<Exit> {
+    fn output(&mut self, command: Command, instructions: u32) -> Option<Exit> {
         let link = self.decoder.stats();
         let telemetry = Telemetry {
             step_instructions: instructions,
@@ -185,22 +254,18 @@ where
             ..self
                 .controller
                 .as_ref()
-                .map(Controller::telemetry)
+                .map(Hosted::telemetry)
                 .unwrap_or_default()
         };
         self.send(&DeviceMessage::Output { command, telemetry })
     }
 
     fn send(&mut self, message: &DeviceMessage) -> Option<Exit> {
-        let mut out = [0u8; MAX_FRAME_LEN];
-        let Ok(n) = encode(message, &mut out) else {
+        let Ok(n) = encode(message, &mut self.tx) else {
             defmt::error!("reply does not fit a frame");
             return Some(Exit::LinkFailed);
         };
-        match self.link.write_all(&out[..n]) {
-            Ok(()) => None,
-            Err(_) => Some(Exit::LinkFailed),
-        }
+        write_all(&mut self.link, self.tx.get(..n).unwrap_or(&[])).err()
     }
 }
 
@@ -208,13 +273,21 @@ where
 /// every `period_ticks` of its own clock (`now` ticks, 24-bit down counter like SysTick)
 /// with the latest sensor frame received in that period; the link timeout counts periods:
 /// after `timeout_periods` periods without a valid sensor frame each period answers with
-/// `Controller::safe(seq, Fault::LinkTimeout)`. Frames are drained without blocking
-/// (`embedded_io::ReadReady`), so a silent link never stalls the control loop.
+/// the safe command, `safe(seq, Fault::LinkTimeout)`. Frames are drained without blocking
+/// (`embedded_io::ReadReady`), so a silent link never stalls the control loop. A frame of
+/// the wrong kind is answered with `Rejected` at once and never stepped.
 pub struct FreeRunning {
     /// Control period in clock ticks (SysTick on mps2-an386: 25 MHz, so 2 ms = 50 000).
     pub period_ticks: u32,
     /// Periods without a valid sensor frame before the safe state.
     pub timeout_periods: u32,
+}
+
+/// What the free-running loop carries from one period to the next.
+struct Period {
+    latest: Option<Frame>,
+    missed: u32,
+    start: u32,
 }
 
 impl FreeRunning {
@@ -226,59 +299,92 @@ impl FreeRunning {
         T: StepTimer,
     {
         const MASK: u32 = 0x00ff_ffff;
-        let mut latest = None;
-        let mut missed = 0u32;
-        let mut period_start = clock();
-        let mut buf = [0u8; 64];
+        let mut period = Period {
+            latest: None,
+            missed: 0,
+            start: clock(),
+        };
         loop {
-            while matches!(server.link.read_ready(), Ok(true)) {
-                let n = match server.link.read(&mut buf) {
-                    Ok(0) => return Exit::EndOfStream,
-                    Ok(n) => n,
-                    Err(_) => return Exit::LinkFailed,
-                };
-                for &byte in &buf[..n] {
-                    match server.decoder.push::<HostMessage>(byte) {
-                        Some(Ok(HostMessage::Sensor(frame))) => latest = Some(frame),
-                        Some(Ok(HostMessage::Stop)) => return Exit::Stop,
-                        Some(Ok(other)) => {
-                            if let Some(exit) = server.handle(Ok(other)) {
-                                return exit;
-                            }
-                            period_start = clock();
-                        }
-                        Some(Err(e)) => defmt::debug!("frame rejected: {}", e),
-                        None => {}
-                    }
-                }
-            }
-            if period_start.wrapping_sub(clock()) & MASK < self.period_ticks {
-                continue;
-            }
-            period_start = period_start.wrapping_sub(self.period_ticks) & MASK;
-            let Some(controller) = server.controller.as_mut() else {
-                continue;
-            };
-            let (command, instructions) = match latest.take() {
-                Some(frame) => {
-                    missed = 0;
-                    server.last_seq = frame.seq;
-                    let r = measure_masked(&server.timer, || controller.step(&frame));
-                    server.record(r.1);
-                    r
-                }
-                None => {
-                    missed = missed.saturating_add(1);
-                    if missed < self.timeout_periods {
-                        continue; // the actuator holds the last command
-                    }
-                    let seq = server.last_seq.wrapping_add(missed);
-                    server.stats.link_timeouts = server.stats.link_timeouts.saturating_add(1);
-                    measure_masked(&server.timer, || controller.safe(seq, Fault::LinkTimeout))
-                }
-            };
-            if let Some(exit) = server.output(command, instructions) {
+            if let Some(exit) = Self::drain(server, &mut period, &clock) {
                 return exit;
+            }
+            if period.start.wrapping_sub(clock()) & MASK < self.period_ticks {
+                continue;
+            }
+            period.start = period.start.wrapping_sub(self.period_ticks) & MASK;
+            if let Some(exit) = self.tick(server, &mut period) {
+                return exit;
+            }
+        }
+    }
+
+    /// Read what the link holds without blocking; keep the latest valid sensor frame.
+    fn drain<L, T>(
+        server: &mut Server<L, T>,
+        period: &mut Period,
+        clock: &impl Fn() -> u32,
+    ) -> Option<Exit>
+    where
+        L: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write,
+        T: StepTimer,
+    {
+        let mut buf = [0u8; READ_CHUNK];
+        while matches!(server.link.read_ready(), Ok(true)) {
+            let n = match server.link.read(&mut buf) {
+                Ok(0) => return Some(Exit::EndOfStream),
+                Ok(n) => n,
+                Err(_) => return Some(Exit::LinkFailed),
+            };
+            for &byte in buf.get(..n).unwrap_or(&[]) {
+                let exit = match server.decoder.push::<HostMessage>(byte) {
+                    Some(Ok(HostMessage::Sensor(frame))) => match server.check_kind(&frame) {
+                        Ok(()) => {
+                            period.latest = Some(frame);
+                            None
+                        }
+                        Err(r) => server.send(&DeviceMessage::Rejected(r)),
+                    },
+                    Some(Ok(HostMessage::Stop)) => server.stop(),
+                    Some(Ok(other)) => {
+                        period.start = clock();
+                        server.handle(Ok(other))
+                    }
+                    Some(Err(e)) => {
+                        defmt::debug!("frame rejected: {}", e);
+                        None
+                    }
+                    None => None,
+                };
+                if exit.is_some() {
+                    return exit;
+                }
+            }
+        }
+        None
+    }
+
+    /// One control period: step the latest frame, or count a period without one.
+    fn tick<L, T>(&self, server: &mut Server<L, T>, period: &mut Period) -> Option<Exit>
+    where
+        L: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write,
+        T: StepTimer,
+    {
+        match period.latest.take() {
+            Some(frame) => {
+                period.missed = 0;
+                server.step(&frame)
+            }
+            None => {
+                let controller = server.controller.as_mut()?;
+                period.missed = period.missed.saturating_add(1);
+                if period.missed < self.timeout_periods {
+                    return None; // the actuator holds the last command
+                }
+                let seq = server.last_seq.wrapping_add(period.missed);
+                server.stats.link_timeouts = server.stats.link_timeouts.saturating_add(1);
+                let (command, instructions) =
+                    controller.safe(seq, Fault::LinkTimeout, &server.timer);
+                server.output(command, instructions)
             }
         }
     }

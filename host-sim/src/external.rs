@@ -3,17 +3,16 @@
 //!
 //! **This is the one place the CLI reaches the HIL driver** ([`crate::hil`]). A system
 //! names its controller kind ([`crate::systems::System::Controller`]); `--hil` starts that
-//! kind on the target through [`OnTarget::start`], the plant steps it like the core linked
-//! in, and [`Target::finish`] stops it and returns the [`HilReport`]. Today the HIL driver
-//! hosts the line juggler's [`Controller`] (`crate::hil::LockStep`); when it becomes
-//! generic over the controller kind, the `impl OnTarget for Controller` below becomes one
-//! impl for every kind the firmware hosts, and nothing else changes.
+//! kind on the target through [`OnTarget::start`] (for every kind the protocol carries,
+//! [`Wire`]: `crate::hil::LockStep::<C>::start`), the plant steps it like the core linked
+//! in, and [`Target::finish`] stops it and returns the [`HilReport`]. A new controller kind
+//! the firmware hosts needs nothing here.
 
 use crate::controller::{ControllerError, HilReport, StepController};
 use crate::systems::NoController;
 use crate::verbs::Failure;
-use dexter_core::control::Controller;
 use dexter_core::fixed_rate::FixedRate;
+use dexter_core::protocol::Wire;
 use std::path::PathBuf;
 
 /// The plant link to the firmware.
@@ -51,16 +50,16 @@ pub trait OnTarget: FixedRate + 'static {
     fn start(params: Self::Params, req: &HilRequest) -> Result<Box<dyn Target<Self>>, Failure>;
 }
 
-impl Target<Controller> for crate::hil::LockStep {
+impl<C: Wire> Target<C> for crate::hil::LockStep<C> {
     fn finish(self: Box<Self>) -> Result<HilReport, ControllerError> {
         crate::hil::LockStep::finish(*self)
     }
 }
 
-impl OnTarget for Controller {
+impl<C: Wire + 'static> OnTarget for C {
     fn start(params: Self::Params, req: &HilRequest) -> Result<Box<dyn Target<Self>>, Failure> {
         let opts = hil_options(req)?;
-        let lock = crate::hil::LockStep::start(params, opts).map_err(Failure::run)?;
+        let lock = crate::hil::LockStep::<C>::start(params, opts).map_err(Failure::run)?;
         Ok(Box::new(lock))
     }
 }
@@ -88,7 +87,7 @@ fn hil_options(req: &HilRequest) -> Result<crate::hil::HilOptions, Failure> {
         };
     }
     if let Some(b) = req.budget {
-        opts.instruction_budget = (b > 0).then_some(b);
+        opts.instruction_budget = (b > 0).then_some(b).into();
     }
     if let Some(r) = req.corrupt_rate {
         if !(0.0..=1.0).contains(&r) {

@@ -169,14 +169,11 @@ impl Controller {
         &self.estimate
     }
 
-    /// Telemetry fields the core knows (the firmware adds timing and link counts).
+    /// Telemetry fields the core knows (the firmware adds timing and link counts): estimate
+    /// slot 0 is the ball height, m, slot 1 its velocity, m/s.
     pub fn telemetry(&self) -> Telemetry {
-        Telemetry {
-            ball_height_est_m: self.estimate.ball.height_m,
-            ball_velocity_est_mps: self.estimate.ball.velocity_mps,
-            estimate_valid: self.estimate.valid,
-            ..Telemetry::default()
-        }
+        let ball = &self.estimate.ball;
+        Telemetry::with_estimate(&[ball.height_m, ball.velocity_mps], self.estimate.valid)
     }
 
     /// One control period: the command for `frame`.
@@ -286,6 +283,8 @@ impl FixedRate for Controller {
     type Params = ControllerParams;
     type Frame = SensorFrame;
     type Command = ActuatorCommand;
+    /// The line-juggler goal (BENCHMARKS.md, "Control step on the target").
+    const STEP_INSTRUCTION_BUDGET: u32 = 300;
 
     fn new(params: ControllerParams) -> Result<Self, ParamError> {
         Controller::new(params)

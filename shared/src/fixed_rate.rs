@@ -5,8 +5,10 @@
 //! Every controller the firmware hosts (the line juggler's [`Controller`], and the tilt
 //! table, the hopper's thrust and the arm's trajectory tracker as they join) implements
 //! [`FixedRate`], and its command type implements [`Reply`]. The simulator's SIL loop, the
-//! host's HIL driver and the firmware's server are written once against these two traits:
-//! a new controller needs its own parameter, frame and command types, not a new loop.
+//! host's HIL driver and the firmware's server are written once against these two traits
+//! and [`Wire`] (how a controller's types travel on the link): a new controller needs its
+//! own parameter, frame and command types and one line in the protocol's kind list, not a
+//! new loop (see [`crate::protocol`], "Adding a controller kind").
 //!
 //! Contract of an implementation (tested per controller):
 //! - `step` does bounded work (fixed iteration caps, no recursion), allocates nothing and
@@ -17,6 +19,7 @@
 //!   frames' sequence numbers.
 //!
 //! [`Controller`]: crate::control::Controller
+//! [`Wire`]: crate::protocol::Wire
 
 use crate::params::ParamError;
 use crate::protocol::{ActuatorCommand, Fault, Mode, Telemetry};
@@ -29,6 +32,10 @@ pub trait FixedRate: Sized {
     type Frame: Copy;
     /// The controller's output for one control period.
     type Command: Reply;
+    /// Most target instructions one [`FixedRate::step`] (or [`FixedRate::safe`]) may take on
+    /// the Cortex-M4F, for every configuration [`FixedRate::new`] accepts; the controller's
+    /// docs give the argument. The HIL driver fails a step over it unless told otherwise.
+    const STEP_INSTRUCTION_BUDGET: u32;
 
     /// A controller; the error names the first invalid parameter.
     fn new(params: Self::Params) -> Result<Self, ParamError>;

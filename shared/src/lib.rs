@@ -21,13 +21,15 @@
 //! | [`track`] | paddle tracking: PD plus feed-forward within limits | — |
 //! | [`fixed_rate`] | the one shape of every controller: [`FixedRate`](fixed_rate::FixedRate) and [`Reply`](fixed_rate::Reply) | — |
 //! | [`control`] | the fixed-rate line-juggler [`Controller`](control::Controller) and its safe state | — |
-//! | [`protocol`] | wire types, postcard + CRC + COBS framing, typed decode errors | — |
+//! | [`echo`] | the link check [`Echo`](echo::Echo): a controller with no plant, for links and HIL tests | — |
+//! | [`protocol`] | wire types of every controller kind ([`Wire`](protocol::Wire)), postcard + CRC + COBS framing, typed decode errors | — |
 #![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
 // One `asm!` (the FPU square root in `math.rs`) is the only unsafe code; it is allowed there.
 #![deny(unsafe_code)]
 
 pub mod control;
+pub mod echo;
 pub mod estimate;
 pub mod fixed_rate;
 pub mod hop;

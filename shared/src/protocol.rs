@@ -1,6 +1,7 @@
 //! Wire protocol between the plant (simulator, or a real sensor/actuator front end) and the
-//! controller (firmware, or the core linked into the simulator).
+//! controller (firmware, or the core linked into the simulator), for every controller kind.
 //!
+//! ## Framing
 //! A frame on the byte link is `COBS(postcard(message) ++ crc32c_le) ++ 0x00`:
 //! - [postcard](https://docs.rs/postcard) encodes the message (varint integers, f32 as 4 bytes);
 //! - a CRC-32C (Castagnoli, `crc::CRC_32_ISCSI`) of the postcard bytes, little-endian,
@@ -8,22 +9,56 @@
 //! - COBS removes every zero byte, so `0x00` only ever delimits frames and a receiver that
 //!   lost bytes resynchronises at the next delimiter.
 //!
-//! [`FrameDecoder`] consumes a byte stream one byte at a time with a fixed buffer, returns
-//! one decoded message per delimiter, and counts every rejected frame by reason.
+//! [`FrameDecoder`] consumes a byte stream one byte at a time with a fixed buffer (COBS is
+//! undone as the bytes arrive), returns one decoded message per delimiter, and counts every
+//! rejected frame by reason. Encoding and decoding never panic.
+//!
+//! ## Messages: one set for every controller kind
+//! The host sends [`HostMessage::Configure`] with a [`Config`] (which controller, with what
+//! parameters), then one [`HostMessage::Sensor`] [`Frame`] per control period, each answered
+//! by [`DeviceMessage::Output`] with a [`Command`] and controller-neutral [`Telemetry`].
+//! [`Config`], [`Frame`] and [`Command`] have one variant per controller [`Kind`]; the
+//! [`Wire`] trait maps a [`FixedRate`] controller to its variants, so the host's HIL driver
+//! and the firmware's server are written once for all kinds. A frame of another kind than
+//! the configured controller's is answered with [`DeviceMessage::Rejected`]
+//! ([`Rejection::WrongKind`]), never a panic.
+//!
+//! ## Adding a controller kind
+//! 1. Implement [`FixedRate`] for it (its params, frame and command types derive
+//!    `Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize`, and hold only
+//!    fixed-size fields: numbers, bools, fieldless enums, arrays and structs of them — no
+//!    `Option`, slices or strings, so every message has one worst-case size).
+//! 2. Add one line `Name => path::Controller` at the **end** of the list in the
+//!    `controller_kinds!` invocation below (the position is the wire tag: append only). That
+//!    line generates the [`Kind`], [`Config`], [`Frame`] and [`Command`] variants and the
+//!    controller's [`Wire`] impl.
+//! 3. Add `Name(path::Controller)` to the firmware's `hosted!` list (`firmware/src/hosted.rs`).
+//!
+//! `shared/tests/protocol_props.rs` then checks that every message of the new kind fits
+//! [`MAX_PAYLOAD_LEN`] (worst case over every value) and round-trips; the HIL driver
+//! (`dexter_sim::hil::LockStep::<path::Controller>`) runs it in QEMU unchanged.
 
+use crate::fixed_rate::FixedRate;
 use crc::{Crc, CRC_32_ISCSI};
 use serde::{Deserialize, Serialize};
 
-/// The largest encoded frame (COBS overhead and delimiter included), bytes.
-pub const MAX_FRAME_LEN: usize = 128;
-/// The largest postcard payload before CRC and COBS, bytes.
-pub const MAX_PAYLOAD_LEN: usize = MAX_FRAME_LEN - 8;
+/// The largest postcard payload before CRC and COBS, bytes. Sized for a 48-field f32
+/// parameter set (the kappa-tilt table needs ~40) with headroom; every message of every
+/// kind is checked against it, worst case over all values, by `shared/tests/protocol_props.rs`.
+pub const MAX_PAYLOAD_LEN: usize = 256;
 /// Length of the CRC trailer, bytes.
 pub const CRC_LEN: usize = 4;
+/// The largest encoded frame: COBS of payload and CRC, plus the `0x00` delimiter, bytes.
+pub const MAX_FRAME_LEN: usize = cobs::max_encoding_length(MAX_PAYLOAD_LEN + CRC_LEN) + 1;
+/// Length of the controller-defined estimate in [`Telemetry::estimate`]: the main state of
+/// each kind (the line juggler's ball height and velocity; a planar body's pose; a hopper's
+/// leg length, velocity and phase). Every slot costs 4 bytes in every `Output` frame, on a
+/// real UART too, so it is kept small.
+pub const ESTIMATE_LEN: usize = 3;
 
 const CRC32C: Crc<u32> = Crc::<u32>::new(&CRC_32_ISCSI);
 
-/// One sample of the plant, sent to the controller every control period.
+/// One sample of the line juggler's plant, sent to its controller every control period.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SensorFrame {
@@ -37,21 +72,21 @@ pub struct SensorFrame {
     pub paddle_velocity_mps: f32,
 }
 
-/// What the controller is doing with the paddle.
+/// What a controller is doing with its actuator.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
 pub enum Mode {
-    /// No valid ball estimate yet: the paddle is held at its home height.
+    /// No valid estimate yet: the actuator is held at its home position.
     #[default]
     Hold = 0,
-    /// Tracking the mirror law.
+    /// Tracking the control law.
     Track = 1,
-    /// Safe state after a fault: the paddle is braked to rest where it is.
+    /// Safe state after a fault: the actuator is braked to rest where it is.
     Safe = 2,
 }
 
-/// Why the controller is in its safe state (0 = no fault).
+/// Why a controller is in its safe state (0 = no fault).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
@@ -69,7 +104,7 @@ pub enum Fault {
     LinkTimeout = 4,
 }
 
-/// The controller's output for one control period.
+/// The line juggler's output for one control period.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ActuatorCommand {
@@ -87,56 +122,245 @@ pub struct ActuatorCommand {
     pub fault: Fault,
 }
 
-/// Status the firmware reports alongside each command.
+/// Status the firmware reports alongside each command, the same for every controller kind.
+///
+/// The core fills [`estimate`](Self::estimate) and [`estimate_valid`](Self::estimate_valid)
+/// ([`FixedRate::telemetry`]); the firmware adds the timing and link counts. What the
+/// estimate's slots hold is the controller's to document (the line juggler: ball height,
+/// m, and velocity, m/s; unused slots are 0).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Telemetry {
     /// Instructions (or cycles, on hardware) the last control step took.
     pub step_instructions: u32,
-    /// Frames rejected by the link so far (CRC, COBS, decode, overlong).
+    /// Frames rejected by the firmware's decoder so far (CRC, COBS, decode, overlong).
     pub link_errors: u32,
-    /// Frames accepted by the link so far.
+    /// Frames accepted by the firmware's decoder so far.
     pub frames_ok: u32,
-    /// Estimated ball height, m.
-    pub ball_height_est_m: f32,
-    /// Estimated ball velocity, m/s.
-    pub ball_velocity_est_mps: f32,
+    /// The controller's state estimate, SI units, slots defined by the controller kind.
+    pub estimate: [f32; ESTIMATE_LEN],
     /// Whether the estimate is valid.
     pub estimate_valid: bool,
 }
 
-/// Controller parameters sent by the host to configure the firmware before a run; the same
-/// values build the SIL controller. See [`crate::control::ControllerParams`].
+impl Telemetry {
+    /// Telemetry with the first `values.len()` (at most [`ESTIMATE_LEN`]) estimate slots
+    /// set, the rest 0, and no timing or link counts (the core's part).
+    pub fn with_estimate(values: &[f32], valid: bool) -> Self {
+        let mut estimate = [0.0; ESTIMATE_LEN];
+        for (slot, v) in estimate.iter_mut().zip(values) {
+            *slot = *v;
+        }
+        Self {
+            estimate,
+            estimate_valid: valid,
+            ..Self::default()
+        }
+    }
+}
+
+/// Controller parameters of the line juggler, re-exported where the protocol uses them.
 pub use crate::control::ControllerParams;
+
+/// How a [`FixedRate`] controller travels on the wire: its [`Kind`], and the variants of
+/// [`Config`], [`Frame`] and [`Command`] that carry its parameters, frames and commands.
+///
+/// Implemented by the `controller_kinds!` list in this module (one line per kind); see the
+/// module documentation for adding a kind.
+pub trait Wire: FixedRate {
+    /// The controller's kind.
+    const KIND: Kind;
+    /// The `Configure` payload for `params`.
+    fn config(params: Self::Params) -> Config;
+    /// This kind's parameters, if `config` is of this kind.
+    fn params_of(config: &Config) -> Option<&Self::Params>;
+    /// The `Sensor` payload for `frame`.
+    fn frame(frame: Self::Frame) -> Frame;
+    /// This kind's frame, if `frame` is of this kind.
+    fn frame_of(frame: &Frame) -> Option<&Self::Frame>;
+    /// The `Output` payload for `command`.
+    fn command(command: Self::Command) -> Command;
+    /// This kind's command, if `command` is of this kind.
+    fn command_of(command: &Command) -> Option<Self::Command>;
+}
+
+/// Declares the controller kinds: for each `Name => Controller` line, a [`Kind`] variant,
+/// the [`Config`], [`Frame`] and [`Command`] variants carrying `Controller`'s
+/// `FixedRate::{Params, Frame, Command}`, and `impl Wire for Controller`. The order of the
+/// lines is the wire tag of every variant: append, never reorder.
+macro_rules! controller_kinds {
+    ($($(#[$doc:meta])* $kind:ident => $controller:ty),+ $(,)?) => {
+        /// Which controller a configuration, frame or command is for.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        pub enum Kind {
+            $($(#[$doc])* $kind,)+
+        }
+
+        impl Kind {
+            /// Every kind, in wire order.
+            pub const ALL: &'static [Kind] = &[$(Kind::$kind),+];
+        }
+
+        /// A controller kind and its parameters ([`HostMessage::Configure`]).
+        #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+        pub enum Config {
+            $($(#[$doc])* $kind(<$controller as FixedRate>::Params),)+
+        }
+
+        /// One sample of the plant for a controller kind ([`HostMessage::Sensor`]).
+        #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+        pub enum Frame {
+            $($(#[$doc])* $kind(<$controller as FixedRate>::Frame),)+
+        }
+
+        /// One control period's output of a controller kind ([`DeviceMessage::Output`]).
+        #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+        pub enum Command {
+            $($(#[$doc])* $kind(<$controller as FixedRate>::Command),)+
+        }
+
+        impl Config {
+            /// The kind this configuration is for.
+            pub fn kind(&self) -> Kind {
+                match self { $(Config::$kind(_) => Kind::$kind,)+ }
+            }
+            /// The default parameters of `kind` (tests and size checks).
+            pub fn default_for(kind: Kind) -> Config {
+                match kind { $(Kind::$kind => Config::$kind(Default::default()),)+ }
+            }
+        }
+
+        impl Frame {
+            /// The kind this frame is for.
+            pub fn kind(&self) -> Kind {
+                match self { $(Frame::$kind(_) => Kind::$kind,)+ }
+            }
+            /// A default (all-zero) frame of `kind` (tests and size checks).
+            pub fn default_for(kind: Kind) -> Frame {
+                match kind { $(Kind::$kind => Frame::$kind(Default::default()),)+ }
+            }
+        }
+
+        impl Command {
+            /// The kind this command is from.
+            pub fn kind(&self) -> Kind {
+                match self { $(Command::$kind(_) => Kind::$kind,)+ }
+            }
+            /// A default command of `kind` (tests and size checks).
+            pub fn default_for(kind: Kind) -> Command {
+                match kind { $(Kind::$kind => Command::$kind(Default::default()),)+ }
+            }
+            /// The command's sequence number, mode and fault, whatever its kind.
+            pub fn reply(&self) -> (u32, Mode, Fault) {
+                use crate::fixed_rate::Reply;
+                match self { $(Command::$kind(c) => (c.seq(), c.mode(), c.fault()),)+ }
+            }
+        }
+
+        $(
+            #[allow(unreachable_patterns)] // a build with a single kind
+            impl Wire for $controller {
+                const KIND: Kind = Kind::$kind;
+                fn config(params: Self::Params) -> Config {
+                    Config::$kind(params)
+                }
+                fn params_of(config: &Config) -> Option<&Self::Params> {
+                    match config { Config::$kind(p) => Some(p), _ => None }
+                }
+                fn frame(frame: Self::Frame) -> Frame {
+                    Frame::$kind(frame)
+                }
+                fn frame_of(frame: &Frame) -> Option<&Self::Frame> {
+                    match frame { Frame::$kind(f) => Some(f), _ => None }
+                }
+                fn command(command: Self::Command) -> Command {
+                    Command::$kind(command)
+                }
+                fn command_of(command: &Command) -> Option<Self::Command> {
+                    match command { Command::$kind(c) => Some(*c), _ => None }
+                }
+            }
+        )+
+    };
+}
+
+controller_kinds! {
+    /// The line juggler: mirror law, estimator and paddle tracker ([`crate::control::Controller`]).
+    Line => crate::control::Controller,
+    /// The link check: echoes a scaled value, no actuator ([`crate::echo::Echo`]).
+    Echo => crate::echo::Echo,
+}
 
 /// A message from the plant side (host) to the controller (firmware).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum HostMessage {
     /// (Re)configure the controller; answered with [`DeviceMessage::Configured`].
-    Configure(ControllerParams),
-    /// A sensor sample; answered with [`DeviceMessage::Output`].
-    Sensor(SensorFrame),
-    /// Ask the firmware to end the run (it exits the emulator with success).
+    Configure(Config),
+    /// A sensor sample; answered with [`DeviceMessage::Output`] (or
+    /// [`DeviceMessage::Rejected`] if no controller of its kind is configured).
+    Sensor(Frame),
+    /// Ask the firmware to end the run: it answers [`DeviceMessage::Stopped`] and exits the
+    /// emulator with success.
     Stop,
+}
+
+/// Why the firmware refused to step a frame (a protocol error of the host, or a firmware
+/// that does not host the kind).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Rejection {
+    /// A sensor frame arrived before any accepted `Configure`.
+    NotConfigured,
+    /// A sensor frame's kind is not the configured controller's.
+    WrongKind {
+        /// The configured controller's kind.
+        configured: Kind,
+        /// The frame's kind.
+        received: Kind,
+    },
+    /// `Configure` named a kind this firmware image does not host.
+    NotHosted(Kind),
+    /// A frame was rejected by the link while no controller was configured (so there is no
+    /// safe command to answer with), e.g. a `Configure` this firmware cannot decode.
+    Undecodable(DecodeError),
+}
+
+/// What the firmware reports when the host stops the run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RunSummary {
+    /// Control steps run (saturating).
+    pub steps: u32,
+    /// Safe commands sent because of a link timeout (saturating).
+    pub link_timeouts: u32,
+    /// Stack high-water mark since reset, bytes (painted stack, see `firmware/src/stack.rs`).
+    pub stack_used_bytes: u32,
+    /// Stack reserved in memory.x, bytes.
+    pub stack_size_bytes: u32,
 }
 
 /// A message from the controller (firmware) to the plant side (host).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum DeviceMessage {
-    /// Configuration result: `Ok` or the rejected parameter's error code.
+    /// Answer to `Configure`.
     Configured {
+        /// The kind that was configured (or rejected).
+        kind: Kind,
         /// True if the parameters were accepted.
         ok: bool,
     },
     /// The command for one sensor frame, with telemetry.
     Output {
-        /// The actuator command.
-        command: ActuatorCommand,
+        /// The controller's command.
+        command: Command,
         /// Status of the firmware.
         telemetry: Telemetry,
     },
+    /// The frame was not stepped; see [`Rejection`].
+    Rejected(Rejection),
+    /// Answer to `Stop`, sent just before the firmware ends the run.
+    Stopped(RunSummary),
 }
 
 /// Why a frame could not be encoded.
@@ -144,16 +368,17 @@ pub enum DeviceMessage {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum EncodeError {
-    /// The output buffer is too small for the frame.
+    /// The message's postcard encoding is longer than [`MAX_PAYLOAD_LEN`], or the output
+    /// buffer is too small for the frame.
     BufferTooSmall,
 }
 
 /// Why a received frame was rejected.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum DecodeError {
-    /// The frame is longer than [`MAX_FRAME_LEN`]; its bytes were discarded.
+    /// The frame is longer than the decoder's buffer; its bytes were discarded.
     Overlong,
     /// The bytes between two delimiters are not valid COBS.
     Cobs,
@@ -178,34 +403,42 @@ impl core::fmt::Display for DecodeError {
 }
 
 /// Encode `message` as one delimited frame into `out`; returns the number of bytes written
-/// (including the trailing `0x00`).
+/// (including the trailing `0x00`). Never panics.
 pub fn encode<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, EncodeError> {
     let mut raw = [0u8; MAX_PAYLOAD_LEN + CRC_LEN];
-    let n = postcard::to_slice(message, &mut raw[..MAX_PAYLOAD_LEN])
+    let (payload_area, _) = raw
+        .split_first_chunk_mut::<MAX_PAYLOAD_LEN>()
+        .ok_or(EncodeError::BufferTooSmall)?;
+    let n = postcard::to_slice(message, payload_area)
         .map_err(|_| EncodeError::BufferTooSmall)?
         .len();
-    let crc = CRC32C.checksum(&raw[..n]);
-    raw[n..n + CRC_LEN].copy_from_slice(&crc.to_le_bytes());
-    let raw = &raw[..n + CRC_LEN];
-    if out.len() < cobs::max_encoding_length(raw.len()) + 1 {
-        return Err(EncodeError::BufferTooSmall);
-    }
-    let len = cobs::encode(raw, out);
-    out[len] = 0;
+    let (payload, rest) = raw
+        .split_at_mut_checked(n)
+        .ok_or(EncodeError::BufferTooSmall)?;
+    let crc = CRC32C.checksum(payload).to_le_bytes();
+    let trailer = rest
+        .first_chunk_mut::<CRC_LEN>()
+        .ok_or(EncodeError::BufferTooSmall)?;
+    *trailer = crc;
+    let raw = raw.get(..n + CRC_LEN).ok_or(EncodeError::BufferTooSmall)?;
+    let len = cobs::try_encode(raw, out).map_err(|_| EncodeError::BufferTooSmall)?;
+    *out.get_mut(len).ok_or(EncodeError::BufferTooSmall)? = 0;
     Ok(len + 1)
 }
 
 /// Decode one frame's bytes (between delimiters, without the `0x00`); `frame` is used as
-/// scratch space for the in-place COBS decode.
+/// scratch space for the in-place COBS decode. Never panics.
 pub fn decode<'de, T: Deserialize<'de>>(frame: &'de mut [u8]) -> Result<T, DecodeError> {
     let n = cobs::decode_in_place(frame).map_err(|_| DecodeError::Cobs)?;
-    if n < CRC_LEN {
-        return Err(DecodeError::TooShort);
-    }
-    let (payload, trailer) = frame[..n].split_at(n - CRC_LEN);
-    let mut crc_bytes = [0u8; CRC_LEN];
-    crc_bytes.copy_from_slice(trailer);
-    if CRC32C.checksum(payload) != u32::from_le_bytes(crc_bytes) {
+    decode_payload(frame.get(..n).ok_or(DecodeError::Cobs)?)
+}
+
+/// Check the CRC trailer of a COBS-decoded frame and decode the message before it.
+fn decode_payload<'de, T: Deserialize<'de>>(decoded: &'de [u8]) -> Result<T, DecodeError> {
+    let (payload, trailer) = decoded
+        .split_last_chunk::<CRC_LEN>()
+        .ok_or(DecodeError::TooShort)?;
+    if CRC32C.checksum(payload) != u32::from_le_bytes(*trailer) {
         return Err(DecodeError::Crc);
     }
     // Trailing bytes after a valid message mean the frame is not what the sender encoded.
@@ -252,16 +485,22 @@ impl LinkStats {
     }
 }
 
-/// Streaming frame decoder with a fixed `N`-byte buffer: feed it bytes as they arrive.
+/// Streaming frame decoder with a fixed buffer: feed it bytes as they arrive. A frame of
+/// more than `N` encoded bytes (delimiter excluded) is rejected as overlong.
 ///
-/// Empty frames (two delimiters in a row) are ignored, which lets a sender flush a
-/// receiver's partial frame by sending a lone `0x00`. After an overlong frame the decoder
-/// discards bytes up to the next delimiter, then resumes.
+/// COBS is undone byte by byte as the frame arrives (`cobs::DecoderState`), so the
+/// delimiter only has to check the CRC and decode the payload. Empty frames (two
+/// delimiters in a row) are ignored, which lets a sender flush a receiver's partial frame
+/// by sending a lone `0x00`. After an overlong frame the decoder discards bytes up to the
+/// next delimiter, then resumes.
 #[derive(Debug)]
 pub struct FrameDecoder<const N: usize = MAX_FRAME_LEN> {
     buf: [u8; N],
-    len: usize,
-    overflowed: bool,
+    /// Decoded bytes in `buf`.
+    decoded: usize,
+    /// Encoded bytes of the current frame so far (saturating).
+    encoded: usize,
+    cobs: cobs::DecoderState,
     stats: LinkStats,
 }
 
@@ -276,8 +515,9 @@ impl<const N: usize> FrameDecoder<N> {
     pub const fn new() -> Self {
         Self {
             buf: [0; N],
-            len: 0,
-            overflowed: false,
+            decoded: 0,
+            encoded: 0,
+            cobs: cobs::DecoderState::Idle,
             stats: LinkStats {
                 frames_ok: 0,
                 overlong: 0,
@@ -300,23 +540,33 @@ impl<const N: usize> FrameDecoder<N> {
         T: for<'de> Deserialize<'de>,
     {
         if byte != 0 {
-            if self.len < N {
-                self.buf[self.len] = byte;
-                self.len += 1;
-            } else {
-                self.overflowed = true;
+            self.encoded = self.encoded.saturating_add(1);
+            if self.encoded <= N {
+                if let Ok(cobs::DecodeResult::DataContinue(b)) = self.cobs.feed(byte) {
+                    if let Some(slot) = self.buf.get_mut(self.decoded) {
+                        *slot = b;
+                        self.decoded += 1;
+                    }
+                }
             }
             return None;
         }
-        let (len, overflowed) = (self.len, self.overflowed);
-        self.len = 0;
-        self.overflowed = false;
-        let result = if overflowed {
-            Err(DecodeError::Overlong)
-        } else if len == 0 {
+        let (encoded, decoded) = (self.encoded, self.decoded);
+        let complete = matches!(self.cobs.feed(0), Ok(cobs::DecodeResult::DataComplete));
+        self.cobs = cobs::DecoderState::Idle;
+        self.encoded = 0;
+        self.decoded = 0;
+        let result = if encoded == 0 {
             return None;
+        } else if encoded > N {
+            Err(DecodeError::Overlong)
+        } else if !complete {
+            Err(DecodeError::Cobs)
         } else {
-            decode::<T>(&mut self.buf[..len])
+            self.buf
+                .get(..decoded)
+                .ok_or(DecodeError::Cobs)
+                .and_then(decode_payload::<T>)
         };
         self.stats
             .count(result.as_ref().map(|_| ()).map_err(|e| *e));
@@ -337,9 +587,19 @@ mod tests {
         }
     }
 
+    fn sensor() -> HostMessage {
+        HostMessage::Sensor(Frame::Line(frame()))
+    }
+
+    #[test]
+    fn max_frame_len_covers_the_largest_payload_with_crc_cobs_and_delimiter() {
+        // COBS adds one byte per started 254-byte block: 260 bytes need 2, plus the 0x00.
+        assert_eq!(MAX_FRAME_LEN, MAX_PAYLOAD_LEN + CRC_LEN + 2 + 1);
+    }
+
     #[test]
     fn round_trip_through_stream_decoder() {
-        let msg = HostMessage::Sensor(frame());
+        let msg = sensor();
         let mut out = [0u8; MAX_FRAME_LEN];
         let n = encode(&msg, &mut out).unwrap();
         assert_eq!(out[n - 1], 0);
@@ -357,7 +617,7 @@ mod tests {
 
     #[test]
     fn flipped_bit_is_rejected_and_next_frame_resyncs() {
-        let msg = HostMessage::Sensor(frame());
+        let msg = sensor();
         let mut out = [0u8; MAX_FRAME_LEN];
         let n = encode(&msg, &mut out).unwrap();
         let mut bad = out;
@@ -390,5 +650,46 @@ mod tests {
         }
         assert_eq!(last, Some(Ok(HostMessage::Stop)));
         assert_eq!(dec.stats().overlong, 1);
+    }
+
+    #[test]
+    fn a_frame_of_exactly_n_encoded_bytes_is_accepted_and_n_plus_one_is_overlong() {
+        let mut out = [0u8; MAX_FRAME_LEN];
+        let n = encode(&sensor(), &mut out).unwrap();
+        let body = n - 1; // encoded bytes without the delimiter
+        let mut exact = FrameDecoder::<64>::new();
+        assert!(body < 64);
+        let feed = |dec: &mut FrameDecoder<64>, bytes: &[u8]| {
+            bytes
+                .iter()
+                .fold(None, |last, &b| dec.push::<HostMessage>(b).or(last))
+        };
+        assert_eq!(feed(&mut exact, &out[..n]), Some(Ok(sensor())));
+        // the same frame into a decoder one byte too small
+        let mut small = FrameDecoder::<8>::new();
+        let r = out[..n]
+            .iter()
+            .fold(None, |last, &b| small.push::<HostMessage>(b).or(last));
+        assert_eq!(r, Some(Err(DecodeError::Overlong)));
+    }
+
+    #[test]
+    fn wire_maps_each_kind_to_its_own_variants_only() {
+        use crate::control::Controller;
+        use crate::echo::{Echo, EchoFrame};
+        let line = <Controller as Wire>::frame(frame());
+        assert_eq!(line.kind(), Kind::Line);
+        assert_eq!(<Controller as Wire>::frame_of(&line), Some(&frame()));
+        assert_eq!(<Echo as Wire>::frame_of(&line), None);
+        let echo = <Echo as Wire>::frame(EchoFrame { seq: 1, value: 2.0 });
+        assert_eq!(echo.kind(), Kind::Echo);
+        assert_eq!(<Controller as Wire>::frame_of(&echo), None);
+        let cmd = Command::default_for(Kind::Echo);
+        assert_eq!(<Controller as Wire>::command_of(&cmd), None);
+        assert!(<Echo as Wire>::command_of(&cmd).is_some());
+        let config = Config::default_for(Kind::Line);
+        assert!(<Controller as Wire>::params_of(&config).is_some());
+        assert!(<Echo as Wire>::params_of(&config).is_none());
+        assert_eq!(Kind::ALL, &[Kind::Line, Kind::Echo]);
     }
 }

@@ -6,9 +6,10 @@
 //! receive register into a [`ByteRing`]; reads take from the ring (sleeping in `wfi` while
 //! it is empty), writes poll the transmit-full flag.
 
-use crate::ring::ByteRing;
+use crate::ring::{ByteRing, Consumer, Producer};
+use core::cell::RefCell;
 use core::ptr::{read_volatile, write_volatile};
-use cortex_m::interrupt::InterruptNumber;
+use cortex_m::interrupt::{InterruptNumber, Mutex};
 use cortex_m::peripheral::NVIC;
 
 const UART0_BASE: usize = 0x4000_4000;
@@ -37,6 +38,9 @@ pub const SLEEP_WHILE_WAITING: bool = true;
 /// Receive buffer between the interrupt and the main loop, bytes (power of two).
 pub const RX_RING_LEN: usize = 256;
 static RX_RING: ByteRing<RX_RING_LEN> = ByteRing::new();
+/// The ring's producer end, owned by the receive interrupt once [`Uart0::new`] hands it over.
+static RX_PRODUCER: Mutex<RefCell<Option<Producer<'static, RX_RING_LEN>>>> =
+    Mutex::new(RefCell::new(None));
 
 /// Interrupt lines of the board this firmware uses.
 #[derive(Clone, Copy, Debug)]
@@ -56,27 +60,44 @@ unsafe impl InterruptNumber for Irq {
 /// Handles the device interrupts this board uses; called from `DefaultHandler` with the
 /// interrupt number (cortex-m-rt is used without a device crate).
 pub fn on_interrupt(irqn: i16) {
-    if irqn == Irq::Uart0Rx as i16 {
+    if irqn != Irq::Uart0Rx as i16 {
+        return;
+    }
+    cortex_m::interrupt::free(|cs| {
+        let Ok(mut producer) = RX_PRODUCER.borrow(cs).try_borrow_mut() else {
+            return;
+        };
         // Safety: MMIO registers of UART0; only this handler reads DATA.
         // Acknowledge first, then drain: a byte that arrives after the last check raises
         // the interrupt again instead of being acknowledged unread.
         unsafe {
             write_volatile(INTSTATUS, INT_RX);
             while read_volatile(STATE) & STATE_RX_FULL != 0 {
-                RX_RING.push(read_volatile(DATA) as u8);
+                let byte = read_volatile(DATA) as u8;
+                if let Some(p) = producer.as_mut() {
+                    p.push(byte);
+                }
             }
         }
-    }
+    });
 }
 
-/// UART0 as a plant link.
+/// UART0 as a plant link: it owns the receive ring's consumer end.
 pub struct Uart0 {
-    _private: (),
+    rx: Consumer<'static, RX_RING_LEN>,
 }
 
 impl Uart0 {
-    /// Enable the transmitter, the receiver and its interrupt.
-    pub fn new(nvic: &mut NVIC) -> Self {
+    /// Enable the transmitter, the receiver and its interrupt; `None` if UART0 was taken
+    /// before (there is one receive ring, with one consumer).
+    pub fn new(nvic: &mut NVIC) -> Option<Self> {
+        let (producer, rx) = RX_RING.split()?;
+        let handed_over = cortex_m::interrupt::free(|cs| {
+            let mut slot = RX_PRODUCER.borrow(cs).try_borrow_mut().ok()?;
+            *slot = Some(producer);
+            Some(())
+        });
+        handed_over?;
         // Safety: MMIO registers of UART0, configured once before the interrupt is unmasked.
         unsafe {
             write_volatile(BAUDDIV, BAUD_DIVIDER);
@@ -84,7 +105,7 @@ impl Uart0 {
             nvic.set_priority(Irq::Uart0Rx, 0);
             NVIC::unmask(Irq::Uart0Rx);
         }
-        Self { _private: () }
+        Some(Self { rx })
     }
 
     /// Bytes lost because the receive ring was full.
@@ -105,14 +126,10 @@ impl embedded_io::Read for Uart0 {
         }
         loop {
             let mut n = 0;
-            while n < buf.len() {
-                match RX_RING.pop() {
-                    Some(b) => {
-                        buf[n] = b;
-                        n += 1;
-                    }
-                    None => break,
-                }
+            for slot in buf.iter_mut() {
+                let Some(b) = self.rx.pop() else { break };
+                *slot = b;
+                n += 1;
             }
             if n > 0 {
                 return Ok(n);
@@ -121,7 +138,7 @@ impl embedded_io::Read for Uart0 {
             // `wfi` still wakes us (a pending interrupt ends `wfi` even while masked).
             if SLEEP_WHILE_WAITING {
                 cortex_m::interrupt::free(|_| {
-                    if RX_RING.is_empty() {
+                    if self.rx.is_empty() {
                         cortex_m::asm::wfi();
                     }
                 });
@@ -132,7 +149,7 @@ impl embedded_io::Read for Uart0 {
 
 impl embedded_io::ReadReady for Uart0 {
     fn read_ready(&mut self) -> Result<bool, Self::Error> {
-        Ok(!RX_RING.is_empty())
+        Ok(!self.rx.is_empty())
     }
 }
 

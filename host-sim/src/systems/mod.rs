@@ -159,6 +159,8 @@ impl FixedRate for NoController {
     type Params = ();
     type Frame = ();
     type Command = dexter_core::protocol::ActuatorCommand;
+    /// Never stepped.
+    const STEP_INSTRUCTION_BUDGET: u32 = 0;
 
     fn new(_: ()) -> Result<Self, dexter_core::params::ParamError> {
         Err(dexter_core::params::ParamError::OutOfRange("controller"))

@@ -1,0 +1,211 @@
+//! The host end of the byte link to the firmware: two FIFOs for the semihosting link, or
+//! the TCP socket QEMU attaches the UART to. Reads wait with `poll(2)` on the calling
+//! thread, in slices, so an emulator that died is noticed at once; one `write` per frame,
+//! one `poll` and one `read` per answer, no thread hand-off and no allocation per frame.
+
+use super::qemu::{describe_exit, link_err, Qemu, WorkDir};
+use super::{LinkKind, SEMIHOSTING_LINK_FILES};
+use crate::controller::ControllerError;
+use std::fs::{File, OpenOptions};
+use std::io::{Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::os::fd::{AsRawFd, RawFd};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// Bytes read from the link at a time.
+const READ_CHUNK: usize = 4096;
+
+/// The host end before QEMU starts.
+pub(super) enum Pending {
+    Fifo { h2d: File, d2h: File },
+    Tcp(TcpListener),
+}
+
+/// Make the host end of `kind` in `workdir`; returns it with the QEMU arguments that
+/// attach the firmware's side.
+pub(super) fn prepare(
+    kind: LinkKind,
+    workdir: &WorkDir,
+) -> Result<(Pending, Vec<String>), ControllerError> {
+    match kind {
+        LinkKind::Semihosting => {
+            let h2d = workdir.path().join(SEMIHOSTING_LINK_FILES[0]);
+            let d2h = workdir.path().join(SEMIHOSTING_LINK_FILES[1]);
+            make_fifo(&h2d)?;
+            make_fifo(&d2h)?;
+            let pending = Pending::Fifo {
+                h2d: open_fifo(&h2d)?,
+                d2h: open_fifo(&d2h)?,
+            };
+            Ok((pending, vec!["-serial".into(), "null".into()]))
+        }
+        LinkKind::Uart => {
+            let listener = TcpListener::bind("127.0.0.1:0")
+                .map_err(|e| link_err(format!("cannot listen on loopback: {e}")))?;
+            let port = listener
+                .local_addr()
+                .map_err(|e| link_err(format!("no local address: {e}")))?
+                .port();
+            // nodelay: QEMU writes one byte per send(); with Nagle on, each answer would
+            // wait for the host's delayed ACK (~40 ms).
+            let args = vec![
+                "-chardev".into(),
+                format!("socket,id=uart0,host=127.0.0.1,port={port},nodelay=on"),
+                "-serial".into(),
+                "chardev:uart0".into(),
+            ];
+            Ok((Pending::Tcp(listener), args))
+        }
+    }
+}
+
+fn make_fifo(path: &Path) -> Result<(), ControllerError> {
+    use std::os::unix::ffi::OsStrExt;
+    let c_path = std::ffi::CString::new(path.as_os_str().as_bytes())
+        .map_err(|_| link_err(format!("{} contains a NUL byte", path.display())))?;
+    // Safety: `c_path` is a valid NUL-terminated string for the duration of the call.
+    if unsafe { libc::mkfifo(c_path.as_ptr(), 0o600) } != 0 {
+        return Err(link_err(format!(
+            "mkfifo {} failed: {}",
+            path.display(),
+            std::io::Error::last_os_error()
+        )));
+    }
+    Ok(())
+}
+
+/// Open a FIFO read-write: never blocks, whether or not QEMU has opened its end yet.
+fn open_fifo(path: &Path) -> Result<File, ControllerError> {
+    OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)
+        .map_err(|e| link_err(format!("cannot open {}: {e}", path.display())))
+}
+
+enum Io {
+    Fifo { h2d: File, d2h: File },
+    Tcp(TcpStream),
+}
+
+/// A connected link.
+pub(super) struct Link {
+    io: Io,
+    buf: Box<[u8; READ_CHUNK]>,
+}
+
+/// What a wait for bytes found.
+pub(super) enum Received<'a> {
+    /// Bytes from the firmware.
+    Bytes(&'a [u8]),
+    /// Nothing within the wait.
+    Nothing,
+}
+
+impl Link {
+    /// Finish connecting once QEMU runs (the UART socket waits for QEMU to connect).
+    pub(super) fn connect(
+        pending: Pending,
+        qemu: &mut Qemu,
+        timeout: Duration,
+    ) -> Result<Link, ControllerError> {
+        let io = match pending {
+            Pending::Fifo { h2d, d2h } => Io::Fifo { h2d, d2h },
+            Pending::Tcp(listener) => {
+                let stream = accept_with_deadline(&listener, qemu, timeout)?;
+                let _ = stream.set_nodelay(true);
+                Io::Tcp(stream)
+            }
+        };
+        Ok(Link {
+            io,
+            buf: Box::new([0; READ_CHUNK]),
+        })
+    }
+
+    /// Write all of `bytes` (one system call for a frame).
+    pub(super) fn write_all(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        match &mut self.io {
+            Io::Fifo { h2d, .. } => h2d.write_all(bytes),
+            Io::Tcp(s) => s.write_all(bytes),
+        }
+    }
+
+    fn read_fd(&self) -> RawFd {
+        match &self.io {
+            Io::Fifo { d2h, .. } => d2h.as_raw_fd(),
+            Io::Tcp(s) => s.as_raw_fd(),
+        }
+    }
+
+    /// Wait up to `wait` for bytes and return what one read got.
+    pub(super) fn receive(&mut self, wait: Duration) -> std::io::Result<Received<'_>> {
+        let mut fds = libc::pollfd {
+            fd: self.read_fd(),
+            events: libc::POLLIN,
+            revents: 0,
+        };
+        // Round up, so a wait shorter than 1 ms still waits instead of spinning.
+        let ms = wait.as_micros().div_ceil(1000).min(i32::MAX as u128) as libc::c_int;
+        // Safety: `fds` is one valid pollfd for the duration of the call.
+        let ready = unsafe { libc::poll(&mut fds, 1, ms) };
+        if ready < 0 {
+            let e = std::io::Error::last_os_error();
+            return match e.kind() {
+                std::io::ErrorKind::Interrupted => Ok(Received::Nothing),
+                _ => Err(e),
+            };
+        }
+        if ready == 0 {
+            return Ok(Received::Nothing);
+        }
+        let n = match &mut self.io {
+            Io::Fifo { d2h, .. } => d2h.read(&mut self.buf[..])?,
+            Io::Tcp(s) => s.read(&mut self.buf[..])?,
+        };
+        if n == 0 {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::UnexpectedEof,
+                "the link was closed",
+            ));
+        }
+        Ok(Received::Bytes(&self.buf[..n]))
+    }
+}
+
+fn accept_with_deadline(
+    listener: &TcpListener,
+    qemu: &mut Qemu,
+    timeout: Duration,
+) -> Result<TcpStream, ControllerError> {
+    listener
+        .set_nonblocking(true)
+        .map_err(|e| link_err(format!("cannot poll the listener: {e}")))?;
+    let deadline = Instant::now() + timeout;
+    loop {
+        match listener.accept() {
+            Ok((stream, _)) => {
+                stream
+                    .set_nonblocking(false)
+                    .map_err(|e| link_err(format!("socket: {e}")))?;
+                return Ok(stream);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                if let Some(status) = qemu.exited() {
+                    return Err(link_err(format!(
+                        "QEMU exited ({}) before connecting its UART",
+                        describe_exit(status)
+                    )));
+                }
+                if Instant::now() >= deadline {
+                    return Err(link_err(format!(
+                        "timeout: QEMU did not connect its UART within {timeout:?}"
+                    )));
+                }
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            Err(e) => return Err(link_err(format!("accept failed: {e}"))),
+        }
+    }
+}

@@ -1,0 +1,342 @@
+//! The QEMU side of a HIL run: toolchain checks, building the firmware, the emulator
+//! process in a private working directory, its exit status, and its defmt log.
+
+use super::{LinkKind, ICOUNT_SHIFT, QEMU, QEMU_MACHINE, TARGET};
+use crate::controller::ControllerError;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+pub(super) fn link_err(msg: impl Into<String>) -> ControllerError {
+    ControllerError::Link(msg.into())
+}
+
+/// The workspace root (where `.cargo/config.toml` lives).
+pub fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."))
+}
+
+fn target_dir() -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(dir) => workspace_root().join(dir),
+        None => workspace_root().join("target"),
+    }
+}
+
+/// Where `cargo build -p dexter-firmware --release --target thumbv7em-none-eabihf` puts
+/// the firmware ELF.
+pub fn default_firmware_elf() -> PathBuf {
+    target_dir()
+        .join(TARGET)
+        .join("release")
+        .join("dexter-firmware")
+}
+
+/// Check that the emulator runs; the error says what to install.
+pub fn check_qemu() -> Result<(), ControllerError> {
+    let qemu = Command::new(QEMU)
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status();
+    if matches!(qemu, Ok(s) if s.success()) {
+        return Ok(());
+    }
+    Err(link_err(format!(
+        "{QEMU} not found: install it with `apt-get install qemu-system-arm` \
+         (QEMU >= 7.2 for {QEMU_MACHINE})"
+    )))
+}
+
+/// Check that the emulator and the firmware's Rust target are installed (what building
+/// and running the firmware needs); the error says what to install.
+pub fn check_toolchain() -> Result<(), ControllerError> {
+    check_qemu()?;
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let sysroot = Command::new(&rustc)
+        .args(["--print", "sysroot"])
+        .output()
+        .map_err(|e| {
+            link_err(format!(
+                "cannot run `{rustc}` to find the Rust sysroot: {e}"
+            ))
+        })?;
+    let sysroot = PathBuf::from(String::from_utf8_lossy(&sysroot.stdout).trim());
+    if !sysroot.join("lib/rustlib").join(TARGET).is_dir() {
+        return Err(link_err(format!(
+            "the Rust target {TARGET} is not installed: run `rustup target add {TARGET}`"
+        )));
+    }
+    Ok(())
+}
+
+/// Build the firmware (`cargo build -p dexter-firmware --release --target
+/// thumbv7em-none-eabihf` in the workspace root) and return the ELF's path.
+pub fn build_firmware() -> Result<PathBuf, ControllerError> {
+    build_firmware_with_features(&[])
+}
+
+/// [`build_firmware`] with cargo features of `dexter-firmware` (e.g. `fast-math`, `bench`);
+/// the ELF is written to the same path.
+pub fn build_firmware_with_features(features: &[&str]) -> Result<PathBuf, ControllerError> {
+    check_toolchain()?;
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut cmd = Command::new(cargo);
+    cmd.current_dir(workspace_root()).args([
+        "build",
+        "-p",
+        "dexter-firmware",
+        "--release",
+        "--target",
+        TARGET,
+    ]);
+    if !features.is_empty() {
+        cmd.args(["--features", &features.join(",")]);
+    }
+    let out = cmd
+        .output()
+        .map_err(|e| link_err(format!("cannot run cargo to build the firmware: {e}")))?;
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        let lines: Vec<&str> = err.lines().collect();
+        let tail = lines[lines.len().saturating_sub(30)..].join("\n");
+        return Err(link_err(format!(
+            "building the firmware failed ({}):\n{tail}",
+            out.status
+        )));
+    }
+    Ok(default_firmware_elf())
+}
+
+/// The firmware ELF as an absolute path (QEMU runs in a private directory), or an error
+/// that says how to build it.
+pub(super) fn resolve_firmware(elf: &Path) -> Result<PathBuf, ControllerError> {
+    std::fs::canonicalize(elf)
+        .ok()
+        .filter(|p| p.is_file())
+        .ok_or_else(|| {
+            link_err(format!(
+                "firmware ELF {} not found: build it with `cargo fw-build` \
+                 (cargo build -p dexter-firmware --release --target {TARGET}) \
+                 or call hil::build_firmware()",
+                elf.display()
+            ))
+        })
+}
+
+/// A directory removed when dropped.
+pub(super) struct WorkDir(PathBuf);
+
+static RUN_ID: AtomicU64 = AtomicU64::new(0);
+
+impl WorkDir {
+    /// A fresh private directory under the system's temporary directory.
+    pub(super) fn create() -> Result<Self, ControllerError> {
+        let dir = std::env::temp_dir().join(format!(
+            "dexter-hil-{}-{}",
+            std::process::id(),
+            RUN_ID.fetch_add(1, Ordering::Relaxed)
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| link_err(format!("cannot create {}: {e}", dir.display())))?;
+        Ok(WorkDir(dir))
+    }
+
+    pub(super) fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for WorkDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A running QEMU: killed, waited for and its working directory removed when dropped.
+pub(super) struct Qemu {
+    child: Child,
+    log: Arc<Mutex<Vec<u8>>>,
+    stderr: Arc<Mutex<Vec<u8>>>,
+    collectors: Vec<JoinHandle<()>>,
+    /// Dropped after the child is gone (the FIFOs live here).
+    _workdir: WorkDir,
+}
+
+impl Qemu {
+    /// Boot `elf` (absolute) in `workdir` with the boot word of `link` and the link's extra
+    /// arguments (`-serial ...`).
+    pub(super) fn spawn(
+        elf: &Path,
+        link: LinkKind,
+        workdir: WorkDir,
+        link_args: &[String],
+    ) -> Result<Self, ControllerError> {
+        let mut cmd = Command::new(QEMU);
+        cmd.current_dir(workdir.path())
+            .args(["-machine", QEMU_MACHINE, "-nographic", "-monitor", "none"])
+            .args(["-icount", &format!("shift={ICOUNT_SHIFT}")])
+            .args(["-semihosting-config", "enable=on,target=native"])
+            .arg("-kernel")
+            .arg(elf)
+            .args(["-append", link.boot_word()])
+            .args(link_args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        let mut child = cmd
+            .spawn()
+            .map_err(|e| link_err(format!("cannot start {QEMU}: {e}")))?;
+        let log = Arc::new(Mutex::new(Vec::new()));
+        let stderr = Arc::new(Mutex::new(Vec::new()));
+        let mut collectors = Vec::new();
+        if let Some(out) = child.stdout.take() {
+            collectors.push(spawn_collector(out, log.clone()));
+        }
+        if let Some(err) = child.stderr.take() {
+            collectors.push(spawn_collector(err, stderr.clone()));
+        }
+        Ok(Qemu {
+            child,
+            log,
+            stderr,
+            collectors,
+            _workdir: workdir,
+        })
+    }
+
+    pub(super) fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// The exit status, if QEMU has exited.
+    pub(super) fn exited(&mut self) -> Option<ExitStatus> {
+        self.child.try_wait().ok().flatten()
+    }
+
+    /// A link error; if QEMU has exited, say so (with its status and stderr).
+    pub(super) fn dead_or(&mut self, msg: String) -> ControllerError {
+        let Some(status) = self.exited() else {
+            return link_err(msg);
+        };
+        std::thread::sleep(Duration::from_millis(50)); // let the stderr collector finish
+        let stderr = self
+            .stderr
+            .lock()
+            .map(|v| String::from_utf8_lossy(&v).into_owned())
+            .unwrap_or_default();
+        link_err(format!(
+            "QEMU exited ({}) — {msg}; QEMU stderr: {}",
+            describe_exit(status),
+            stderr.trim()
+        ))
+    }
+
+    /// Wait until QEMU exits: success, or an error naming the status (a panic or HardFault
+    /// in the firmware ends the run with status 1).
+    pub(super) fn wait_success(&mut self, timeout: Duration) -> Result<(), ControllerError> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            match self.child.try_wait() {
+                Ok(Some(status)) if status.success() => return Ok(()),
+                Ok(Some(status)) => {
+                    return Err(link_err(format!(
+                        "the firmware ended the run with a failure ({})",
+                        describe_exit(status)
+                    )))
+                }
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(2))
+                }
+                Ok(None) => {
+                    return Err(link_err(format!(
+                        "timeout: QEMU did not exit within {timeout:?} after Stop"
+                    )))
+                }
+                Err(e) => return Err(link_err(format!("cannot wait for QEMU: {e}"))),
+            }
+        }
+    }
+
+    /// The raw defmt log so far (QEMU's stdout, the firmware's semihosting stdout).
+    pub(super) fn log(&self) -> Vec<u8> {
+        self.log.lock().map(|v| v.clone()).unwrap_or_default()
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        for t in self.collectors.drain(..) {
+            let _ = t.join();
+        }
+    }
+}
+
+fn spawn_collector(
+    mut source: impl Read + Send + 'static,
+    into: Arc<Mutex<Vec<u8>>>,
+) -> JoinHandle<()> {
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        while let Ok(n) = source.read(&mut buf) {
+            if n == 0 {
+                break;
+            }
+            if let Ok(mut v) = into.lock() {
+                v.extend_from_slice(&buf[..n]);
+            }
+        }
+    })
+}
+
+/// QEMU's exit status in words.
+pub(super) fn describe_exit(status: ExitStatus) -> String {
+    match status.code() {
+        Some(0) => "status 0, success".into(),
+        Some(1) => {
+            "status 1: the firmware reported a failure (panic, HardFault or link error)".into()
+        }
+        Some(c) => format!("status {c}"),
+        None => "killed by a signal".into(),
+    }
+}
+
+/// Decode a defmt byte stream (the firmware's semihosting stdout) with the ELF's defmt
+/// table into one `LEVEL message` line per log frame.
+pub fn decode_defmt_log(elf: &Path, bytes: &[u8]) -> Result<String, ControllerError> {
+    let data =
+        std::fs::read(elf).map_err(|e| link_err(format!("cannot read {}: {e}", elf.display())))?;
+    let table = defmt_decoder::Table::parse(&data)
+        .map_err(|e| link_err(format!("bad defmt table in {}: {e}", elf.display())))?
+        .ok_or_else(|| link_err(format!("{} has no defmt data", elf.display())))?;
+    let mut decoder = table.new_stream_decoder();
+    decoder.received(bytes);
+    let mut out = String::new();
+    loop {
+        match decoder.decode() {
+            Ok(frame) => {
+                let level = frame
+                    .level()
+                    .map(|l| format!("{l:?}").to_uppercase())
+                    .unwrap_or_else(|| "PRINT".into());
+                out.push_str(&format!("{level} {}\n", frame.display_message()));
+            }
+            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
+            Err(defmt_decoder::DecodeError::Malformed) => {
+                out.push_str("(malformed defmt frame: the rest of the log is not decoded)\n");
+                break;
+            }
+        }
+    }
+    Ok(out)
+}
