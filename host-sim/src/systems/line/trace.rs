@@ -1,5 +1,7 @@
-//! Impact traces: one row per impact, written as CSV with 17 significant digits.
+//! The line juggler's trace: one row per impact, written as CSV with 17 significant
+//! digits.
 
+use crate::output::{Sig17, TraceRow};
 use std::io::Write;
 
 /// One impact of the ball with the paddle (or table), as recorded in a trace.
@@ -28,27 +30,30 @@ pub struct ImpactRow {
 /// The CSV header, in column order.
 pub const CSV_HEADER: &str = "index,time_s,ball_height_m,ball_velocity_before_mps,ball_velocity_after_mps,paddle_height_m,paddle_velocity_mps,apex_height_m";
 
-/// A float with 17 significant digits (round-trips exactly).
-fn sig17(x: f64) -> String {
-    format!("{x:.16e}")
+impl TraceRow for ImpactRow {
+    const HEADER: &'static str = CSV_HEADER;
+
+    fn write_csv(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        writeln!(
+            w,
+            "{},{},{},{},{},{},{},{}",
+            self.index,
+            Sig17(self.time_s),
+            Sig17(self.ball_height_m),
+            Sig17(self.ball_velocity_before_mps),
+            Sig17(self.ball_velocity_after_mps),
+            Sig17(self.paddle_height_m),
+            Sig17(self.paddle_velocity_mps),
+            Sig17(self.apex_height_m)
+        )
+    }
 }
 
 /// Write `rows` as CSV with a header.
 pub fn write_csv(rows: &[ImpactRow], mut w: impl Write) -> std::io::Result<()> {
     writeln!(w, "{CSV_HEADER}")?;
     for r in rows {
-        writeln!(
-            w,
-            "{},{},{},{},{},{},{},{}",
-            r.index,
-            sig17(r.time_s),
-            sig17(r.ball_height_m),
-            sig17(r.ball_velocity_before_mps),
-            sig17(r.ball_velocity_after_mps),
-            sig17(r.paddle_height_m),
-            sig17(r.paddle_velocity_mps),
-            sig17(r.apex_height_m)
-        )?;
+        r.write_csv(&mut w)?;
     }
     Ok(())
 }

@@ -1,11 +1,15 @@
 //! Range and cross-field checks; every error names the dotted key.
 
-use super::schema::*;
-use super::SceneError;
+use super::scene::*;
+use crate::scene::SceneError;
 use dexter_core::control::ControllerParams;
 use dexter_core::estimate::EstimatorParams;
 use dexter_core::params::ParamError;
 use dexter_core::track::PaddleLimits;
+
+/// Longest period `analysis.max_period` may ask for: the summary keeps the last
+/// 5 x `max_period` apexes (`summary::ApexStats`).
+pub const MAX_PERIOD: u32 = 1024;
 
 fn finite(key: &str, v: f64) -> Result<f64, SceneError> {
     if v.is_finite() {
@@ -58,43 +62,37 @@ impl Scene {
         }
         positive("stop.duration_s", self.stop.duration_s)?;
         finite("table.height_m", self.table.height_m)?;
+        self.validate_control()?;
+        self.validate_actuator()?;
+        self.validate_effects()?;
+        self.validate_zeno_and_analysis()
+    }
+
+    /// `[control]`: the target and the mirror gains; for `sil`, the core's own checks.
+    fn validate_control(&self) -> Result<(), SceneError> {
         let c = &self.control;
-        if c.mode != ControlMode::None {
-            let target = c.target_apex_m.ok_or_else(|| {
-                SceneError::new(
-                    "control.target_apex_m",
-                    "missing: a target apex is required when control.mode is not \"none\"",
-                )
-            })?;
-            positive("control.target_apex_m", target)?;
-            if let Some(k0) = c.kappa0 {
-                if !(finite("control.kappa0", k0)? >= 0.0 && k0 < 1.0) {
-                    return Err(SceneError::new(
-                        "control.kappa0",
-                        format!("must be in [0, 1), got {k0}"),
-                    ));
-                }
-            } else if self.kappa0() >= 1.0 {
-                return Err(SceneError::new(
-                    "control.kappa0",
-                    format!(
-                        "its default, matched to the restitution, (1 - e)/(1 + e) = {} for physics.restitution = {}, is not < 1: set control.kappa0",
-                        self.kappa0(),
-                        p.restitution
-                    ),
-                ));
-            }
-            non_negative("control.kappa1_s2pm2", c.kappa1_s2pm2)?;
-            if self.ball.height_m < 0.0 {
+        if c.mode == ControlMode::None {
+            if self.ball.height_m < self.table.height_m {
                 return Err(SceneError::new(
                     "ball.height_m",
-                    "must be >= 0 (above the impact plane) for a juggling scene",
+                    "must not start below table.height_m",
                 ));
             }
-        } else if self.ball.height_m < self.table.height_m {
+            return Ok(());
+        }
+        let target = c.target_apex_m.ok_or_else(|| {
+            SceneError::new(
+                "control.target_apex_m",
+                "missing: a target apex is required when control.mode is not \"none\"",
+            )
+        })?;
+        positive("control.target_apex_m", target)?;
+        self.validate_kappa0()?;
+        non_negative("control.kappa1_s2pm2", c.kappa1_s2pm2)?;
+        if self.ball.height_m < 0.0 {
             return Err(SceneError::new(
                 "ball.height_m",
-                "must not start below table.height_m",
+                "must be >= 0 (above the impact plane) for a juggling scene",
             ));
         }
         if c.mode == ControlMode::Sil {
@@ -104,26 +102,59 @@ impl Scene {
                 .validate()
                 .map_err(|e| param_error(&e))?;
         }
-        let a = &self.actuator;
-        finite("actuator.initial_height_m", a.initial_height_m)?;
-        if a.kind == ActuatorKind::SecondOrder {
-            positive("actuator.accel_max_mps2", a.accel_max_mps2)?;
-            positive("actuator.velocity_max_mps", a.velocity_max_mps)?;
-            finite("actuator.min_height_m", a.min_height_m)?;
-            finite("actuator.max_height_m", a.max_height_m)?;
-            if a.max_height_m <= a.min_height_m {
+        Ok(())
+    }
+
+    /// `control.kappa0`, or its default matched to the restitution, in [0, 1).
+    fn validate_kappa0(&self) -> Result<(), SceneError> {
+        if let Some(k0) = self.control.kappa0 {
+            if !(finite("control.kappa0", k0)? >= 0.0 && k0 < 1.0) {
                 return Err(SceneError::new(
-                    "actuator.max_height_m",
-                    "must be > actuator.min_height_m",
+                    "control.kappa0",
+                    format!("must be in [0, 1), got {k0}"),
                 ));
             }
-            within(
-                "actuator.initial_height_m",
-                a.initial_height_m,
-                a.min_height_m,
-                a.max_height_m,
-            )?;
+        } else if self.kappa0() >= 1.0 {
+            return Err(SceneError::new(
+                "control.kappa0",
+                format!(
+                    "its default, matched to the restitution, (1 - e)/(1 + e) = {} for physics.restitution = {}, is not < 1: set control.kappa0",
+                    self.kappa0(),
+                    self.physics.restitution
+                ),
+            ));
         }
+        Ok(())
+    }
+
+    /// `[actuator]`.
+    fn validate_actuator(&self) -> Result<(), SceneError> {
+        let a = &self.actuator;
+        finite("actuator.initial_height_m", a.initial_height_m)?;
+        if a.kind != ActuatorKind::SecondOrder {
+            return Ok(());
+        }
+        positive("actuator.accel_max_mps2", a.accel_max_mps2)?;
+        positive("actuator.velocity_max_mps", a.velocity_max_mps)?;
+        finite("actuator.min_height_m", a.min_height_m)?;
+        finite("actuator.max_height_m", a.max_height_m)?;
+        if a.max_height_m <= a.min_height_m {
+            return Err(SceneError::new(
+                "actuator.max_height_m",
+                "must be > actuator.min_height_m",
+            ));
+        }
+        within(
+            "actuator.initial_height_m",
+            a.initial_height_m,
+            a.min_height_m,
+            a.max_height_m,
+        )?;
+        Ok(())
+    }
+
+    /// `[sensor]`, `[jitter]`, `[drag]` when present.
+    fn validate_effects(&self) -> Result<(), SceneError> {
         if let Some(s) = &self.sensor {
             if let Some(r) = s.rate_hz {
                 positive("sensor.rate_hz", r)?;
@@ -140,6 +171,11 @@ impl Scene {
             positive("drag.step_s", d.step_s)?;
             positive("drag.tolerance", d.tolerance)?;
         }
+        Ok(())
+    }
+
+    /// `[zeno]` and `[analysis]`.
+    fn validate_zeno_and_analysis(&self) -> Result<(), SceneError> {
         let z = &self.zeno;
         non_negative("zeno.velocity_threshold_mps", z.velocity_threshold_mps)?;
         non_negative("zeno.relative_threshold", z.relative_threshold)?;
@@ -152,8 +188,11 @@ impl Scene {
         let an = &self.analysis;
         positive("analysis.converge_tolerance", an.converge_tolerance)?;
         positive("analysis.period_tolerance", an.period_tolerance)?;
-        if an.max_period == 0 {
-            return Err(SceneError::new("analysis.max_period", "must be >= 1"));
+        if an.max_period == 0 || an.max_period > MAX_PERIOD {
+            return Err(SceneError::new(
+                "analysis.max_period",
+                format!("must be in 1..={MAX_PERIOD}, got {}", an.max_period),
+            ));
         }
         Ok(())
     }
@@ -301,17 +340,17 @@ mod tests {
 
     #[test]
     fn overrides_pass_the_same_checks() {
-        let o = vec![super::super::parse_set("physics.restitution=2").unwrap()];
+        let o = vec![crate::scene::parse_set("physics.restitution=2").unwrap()];
         assert_eq!(
             Scene::from_toml_str("", &o).unwrap_err().key,
             "physics.restitution"
         );
-        let o = vec![super::super::parse_set("physics.nope=2").unwrap()];
+        let o = vec![crate::scene::parse_set("physics.nope=2").unwrap()];
         assert_eq!(
             Scene::from_toml_str("", &o).unwrap_err().key,
             "physics.nope"
         );
-        let o = vec![super::super::parse_set("physics.restitution=0.5").unwrap()];
+        let o = vec![crate::scene::parse_set("physics.restitution=0.5").unwrap()];
         assert_eq!(
             Scene::from_toml_str("", &o).unwrap().physics.restitution,
             0.5

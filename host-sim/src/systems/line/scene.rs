@@ -1,9 +1,15 @@
-//! The scene schema: one struct per TOML table, defaults in `Default` impls.
+//! The line juggler's scene schema: one struct per TOML table, defaults in `Default` impls
+//! (every key, its unit and its default: `docs/scenes.md`).
 //!
 //! A table that is absent switches its effect off (`[sensor]`, `[jitter]`, `[drag]`).
+//! Parsing goes `toml::Table -> (--set overrides) -> Scene` with unknown keys rejected
+//! (`deny_unknown_fields`) and every error carrying the dotted key path; then
+//! [`Scene::validate`] checks ranges and cross-field rules.
 
+use crate::scene::{apply_set, deserialize, SceneError};
 use dexter_core::control::ControllerParams;
 use serde::Deserialize;
+use std::path::Path;
 
 /// An f32 default as the f64 with the same shortest decimal form (0.02f32 -> 0.02).
 fn widen(x: f32) -> f64 {
@@ -426,4 +432,43 @@ impl Default for Analysis {
             max_period: 8,
         }
     }
+}
+
+impl Scene {
+    /// Parse and validate a scene from TOML text, after applying `overrides`
+    /// (`key.path=value` pairs, see [`crate::scene::parse_set`]).
+    pub fn from_toml_str(
+        text: &str,
+        overrides: &[(String, toml::Value)],
+    ) -> Result<Self, SceneError> {
+        let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+            SceneError::whole(format!("not valid TOML: {}", e.message()))
+        })?;
+        for (key, value) in overrides {
+            apply_set(&mut table, key, value.clone())?;
+        }
+        Self::from_table(table)
+    }
+
+    /// Deserialize and validate a scene from an already parsed table.
+    pub fn from_table(table: toml::Table) -> Result<Self, SceneError> {
+        let scene: Scene = deserialize(table)?;
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// Read, parse and validate a scene file; overrides as in [`Scene::from_toml_str`].
+    pub fn load(path: &Path, overrides: &[(String, toml::Value)]) -> Result<Self, SceneError> {
+        let file = crate::scene::SceneFile::read(path)?;
+        Self::from_table(file.table_with(overrides)?)
+    }
+}
+
+/// Give a scene table without `scene.name` the name `stem`.
+pub fn name_after(table: &mut toml::Table, stem: &str) -> Result<(), SceneError> {
+    let named = matches!(table.get("scene"), Some(toml::Value::Table(m)) if m.contains_key("name"));
+    if named || matches!(table.get("scene"), Some(v) if !v.is_table()) {
+        return Ok(());
+    }
+    apply_set(table, "scene.name", toml::Value::String(stem.to_string()))
 }

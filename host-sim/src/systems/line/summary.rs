@@ -1,13 +1,83 @@
 //! Run summaries: convergence to the target apex, the detected period, resting contact,
-//! timing; as human-readable text or one JSON object.
+//! timing; as human-readable text or one JSON object. The apex statistics are kept in
+//! constant memory as the run goes ([`ApexStats`]).
 
+use super::run::RunOutcome;
+use super::scene::{ControlMode, Scene};
 use crate::controller::HilReport;
-use crate::run::RunOutcome;
-use crate::scene::{ControlMode, Scene};
+use crate::stream::Tail;
 use serde::Serialize;
 
 /// Fewest trailing in-band apexes for a run to count as converged.
 pub const MIN_CONVERGED_TAIL: usize = 5;
+
+/// Apexes one period is checked over ([`detect_period`] needs `5 p` of them).
+const PERIOD_SPAN: usize = 5;
+
+/// The apex sequence of a run in constant memory: the last apex, the count, the length of
+/// the trailing run of apexes within the convergence band, and the last
+/// 5 x `analysis.max_period` apexes. [`converged_after`] and [`detect_period`] on these
+/// give the same answers as on the whole sequence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ApexStats {
+    target: Option<f64>,
+    band_m: f64,
+    in_band_tail: u64,
+    tail: Tail<f64>,
+    max_period: u32,
+    period_tolerance: f64,
+}
+
+impl ApexStats {
+    /// For a run of `scene` (its target, if it has one, and its `[analysis]` table).
+    pub fn for_scene(scene: &Scene) -> Self {
+        let target = (scene.control.mode != ControlMode::None)
+            .then_some(scene.control.target_apex_m)
+            .flatten();
+        let an = &scene.analysis;
+        Self {
+            target,
+            band_m: target.map_or(0.0, |t| an.converge_tolerance * t.abs()),
+            in_band_tail: 0,
+            tail: Tail::new(PERIOD_SPAN * an.max_period as usize),
+            max_period: an.max_period,
+            period_tolerance: an.period_tolerance,
+        }
+    }
+
+    /// The apex after one more impact, m.
+    #[inline]
+    pub fn push(&mut self, apex_m: f64) {
+        match self.target {
+            Some(t) if (apex_m - t).abs() <= self.band_m => self.in_band_tail += 1,
+            _ => self.in_band_tail = 0,
+        }
+        self.tail.push(apex_m);
+    }
+
+    /// Apexes seen.
+    pub fn count(&self) -> u64 {
+        self.tail.seen()
+    }
+
+    /// The last apex, m.
+    pub fn last(&self) -> Option<f64> {
+        self.tail.last().copied()
+    }
+
+    /// As [`converged_after`] on every apex of the run.
+    pub fn converged_after(&self) -> Option<u64> {
+        self.target?;
+        (self.in_band_tail >= MIN_CONVERGED_TAIL as u64)
+            .then(|| self.count() - self.in_band_tail + 1)
+    }
+
+    /// As [`detect_period`] on every apex of the run.
+    pub fn period(&self) -> Option<u32> {
+        let mut tail = self.tail.clone();
+        detect_period(tail.as_slice(), self.max_period, self.period_tolerance)
+    }
+}
 
 /// The summary of one run (the `--json` object).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -80,7 +150,6 @@ impl Summary {
         let target = (scene.control.mode != ControlMode::None)
             .then_some(scene.control.target_apex_m)
             .flatten();
-        let an = &scene.analysis;
         let first_rest = out.rests.first();
         Self {
             scene: scene.name().to_string(),
@@ -89,13 +158,12 @@ impl Summary {
             sim_time_s: out.sim_time_s,
             wall_time_s: out.wall_time_s,
             target_apex_m: target,
-            final_apex_m: out.apexes_m.last().copied(),
-            converged_after_impacts: target
-                .and_then(|t| converged_after(&out.apexes_m, t, an.converge_tolerance)),
+            final_apex_m: out.apexes.last(),
+            converged_after_impacts: out.apexes.converged_after(),
             period: if out.resting_at_end {
                 None
             } else {
-                detect_period(&out.apexes_m, an.max_period, an.period_tolerance)
+                out.apexes.period()
             },
             resting_contact: out.rest_count > 0,
             resting_since_s: first_rest.map(|r| r.time_s),
@@ -105,7 +173,7 @@ impl Summary {
         }
     }
 
-    /// One JSON object.
+    /// One JSON object (indented).
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
     }
@@ -170,6 +238,41 @@ mod tests {
         assert_eq!(converged_after(&a, 1.0, 0.01), Some(4));
         assert_eq!(converged_after(&a[..6], 1.0, 0.01), None); // tail of 3 only
         assert_eq!(converged_after(&[0.5; 20], 1.0, 0.01), None);
+    }
+
+    /// ApexStats over a stream gives what the functions give on the whole sequence.
+    #[test]
+    fn streaming_statistics_equal_the_whole_sequence() {
+        let mut scene = Scene::default();
+        scene.control.mode = ControlMode::IdealMirror;
+        scene.control.target_apex_m = Some(1.0);
+        scene.analysis.max_period = 3;
+        // settling, a period-3 stretch, a period-2 stretch, noise, convergence
+        let mut seq = Vec::new();
+        let mut x = 0.37_f64;
+        for i in 0..400 {
+            x = 3.9 * x * (1.0 - x);
+            seq.push(match i {
+                0..=99 => 1.0 + 0.5 * (-(i as f64) / 20.0).exp(),
+                100..=199 => [0.8, 1.1, 1.3][i % 3],
+                200..=299 => [0.9, 1.2][i % 2],
+                _ => 1.0 + 0.02 * (x - 0.5),
+            });
+        }
+        for n in [0, 3, 14, 15, 99, 150, 160, 250, 399, 400] {
+            let mut stats = ApexStats::for_scene(&scene);
+            for &a in &seq[..n] {
+                stats.push(a);
+            }
+            let whole = &seq[..n];
+            assert_eq!(
+                stats.converged_after(),
+                converged_after(whole, 1.0, 0.01),
+                "{n}"
+            );
+            assert_eq!(stats.period(), detect_period(whole, 3, 1e-3), "{n}");
+            assert_eq!(stats.last(), whole.last().copied(), "{n}");
+        }
     }
 
     #[test]

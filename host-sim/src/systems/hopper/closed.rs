@@ -1,7 +1,7 @@
 //! The closed forms a scene is compared with: eq. 15/19 (simplified nonlinear model, fixed
 //! thrust) and eq. 17 (linear model, exact when tuned: chi_l = chi_eq, eq. 16).
 
-use super::Loaded;
+use super::HopperConfig;
 use crate::model::hopper::HopperModel;
 use dexter_core::hop::{
     energy_fixed_point, energy_fixed_point_slope, energy_return_map, leg_mass_factor,
@@ -140,7 +140,7 @@ impl ClosedForm {
     /// The closed form of a scene with Raibert's fixed thrust; `None` for the full model
     /// (no closed form), for the energy servo (the thrust changes from hop to hop) and for
     /// a linear scene detuned by more than [`MAX_DETUNING`].
-    pub fn of(sc: &Loaded) -> Option<Self> {
+    pub fn of(sc: &HopperConfig) -> Option<Self> {
         if sc.params.servo.is_some() {
             return None;
         }
@@ -298,7 +298,7 @@ impl ClosedForm {
 }
 
 /// Why a scene has no closed form to compare with, in words.
-pub fn none_reason(sc: &Loaded) -> String {
+pub fn none_reason(sc: &HopperConfig) -> String {
     if sc.params.servo.is_some() {
         return "none with the energy servo (the thrust changes from hop to hop)".into();
     }
