@@ -31,7 +31,7 @@ use self::scene::{ControlMode, Scene};
 use self::summary::Summary;
 use self::trace::ImpactRow;
 use super::{Outcome, System};
-use crate::controller::{HilReport, StepController};
+use crate::controller::{HilReport, SafeSteps, StepController};
 use crate::output::{json_text, JsonStyle};
 use crate::scene::{SceneError, SceneFile};
 use crate::verbs::{Failure, RunLength, Setup, SweepRequest};
@@ -61,6 +61,9 @@ impl Outcome for LineOutcome {
     }
     fn attach_hil(&mut self, report: HilReport) {
         self.summary.hil = Some(report);
+    }
+    fn safe_steps(&self) -> Option<&SafeSteps> {
+        (self.summary.control_steps > 0).then_some(&self.summary.safe)
     }
 }
 
