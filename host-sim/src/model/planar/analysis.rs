@@ -521,39 +521,14 @@ pub struct Cell {
     pub max_abs_theta_rad: f64,
 }
 
-/// Classify a run of `model` (see [`CellClass`]).
+/// Classify a run of `model` (see [`CellClass`]): [`super::stats::RunStats::class`] on
+/// every impact of the run.
 pub fn classify(model: &PlanarModel, run: &super::PlanarRun) -> CellClass {
-    let eta_star = model.feedback.target_energy_jpkg();
-    if run
-        .impacts
-        .iter()
-        .any(|r| r.energy_jpkg.is_nan() || r.energy_jpkg > 100.0 * eta_star)
-    {
-        return CellClass::Diverges;
+    let mut stats = super::stats::RunStats::new(model, run.impacts.len());
+    for r in &run.impacts {
+        stats.push(r);
     }
-    match run.end {
-        RunEnd::TippedOver => return CellClass::TipsOver,
-        RunEnd::Completed => {}
-        _ => return CellClass::Diverges,
-    }
-    let n = run.impacts.len();
-    if n < 4 {
-        return CellClass::Drifts;
-    }
-    let q = n / 4;
-    let late = &run.impacts[n - q..];
-    let early = &run.impacts[..q];
-    let mean = late.iter().map(|r| r.energy_jpkg).sum::<f64>() / late.len() as f64;
-    let settled = (mean - eta_star).abs() <= ENERGY_TOL * eta_star;
-    let amp = |rs: &[super::ImpactRecord]| {
-        rs.iter()
-            .fold(0.0f64, |m, r| m.max(r.before.theta_rad.abs()))
-    };
-    if settled && amp(late) <= GROWTH_TOL * amp(early) {
-        CellClass::Converges
-    } else {
-        CellClass::Drifts
-    }
+    stats.class(run.end)
 }
 
 /// A stability map over `thetas_rad` (rows) x `kappas` (columns): each cell is the scene
@@ -575,16 +550,18 @@ pub fn stability_map(
                 ..base.clone()
             };
             let model = p.build()?;
-            let run = model.run(p.start()?, impacts, p.seed);
+            let mut stats = super::stats::RunStats::new(&model, impacts);
+            let mut max_theta = 0.0f64;
+            let done = model.run_streaming(p.start()?, impacts, p.seed, &mut |r| {
+                stats.push(r);
+                max_theta = max_theta.max(r.before.theta_rad.abs());
+            });
             row.push(Cell {
                 theta0_rad: theta0,
                 kappa,
-                class: classify(&model, &run),
-                impacts: run.impacts.len(),
-                max_abs_theta_rad: run
-                    .impacts
-                    .iter()
-                    .fold(0.0f64, |m, r| m.max(r.before.theta_rad.abs())),
+                class: stats.class(done.end),
+                impacts: done.impacts,
+                max_abs_theta_rad: max_theta,
             });
         }
         rows.push(row);
