@@ -364,3 +364,53 @@ fn sweep_reports_a_period_only_once_settled_near_each_doubling() {
         "the cases include orbits a naive test gets wrong ({traps})"
     );
 }
+
+/// No thrust: nothing drives the leg out of its first bottom. The run ends with that named
+/// (no_liftoff), not as a numerical failure (it was `non_finite`: an infinite
+/// decompression time).
+#[test]
+fn no_thrust_ends_in_no_liftoff() {
+    let v = json(&[
+        "run",
+        &scene("11"),
+        "--set",
+        "hopper.thrust_tau_mps2=0",
+        "--json",
+    ]);
+    for t in v["trajectories"].as_array().unwrap() {
+        assert_eq!(t["end"], "no_liftoff", "{t}");
+        assert_eq!(t["cycles"], 0);
+    }
+}
+
+/// Dense samples have a bound named with the key; at the bound a plotted run is bounded
+/// in work (sampling stops once the run's 200000 samples are stored).
+#[test]
+fn samples_per_phase_has_a_bound() {
+    let out = dexter(&[
+        "run",
+        &scene("11"),
+        "--set",
+        "hopper.samples_per_phase=1000000",
+        "--plot",
+        tmp("samples").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("hopper.samples_per_phase") && err.contains("<= 10000"),
+        "{err}"
+    );
+    let dir = tmp("samples-ok");
+    common::ok(&[
+        "run",
+        &scene("11"),
+        "--set",
+        "hopper.samples_per_phase=10000",
+        "--set",
+        "hopper.cycles=2000",
+        "--plot",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(dir.join("hopper-fig11-phase.svg").is_file());
+}

@@ -163,6 +163,22 @@ impl Outcome for HopperOutcome {
     fn json(&self) -> Result<String, String> {
         Ok(summary_json(self).to_string())
     }
+
+    /// An integrator at its step cap, or a non-finite state, is not the hopper's physics.
+    fn shortfall(&self) -> Option<String> {
+        let (i, t) = self
+            .trajectories
+            .iter()
+            .enumerate()
+            .find(|(_, t)| matches!(t.end, RunEnd::StepCap | RunEnd::NonFinite))?;
+        Some(format!(
+            "trajectory {} ended after {} of {} cycles: {}",
+            i + 1,
+            t.cycles,
+            self.cfg.params.cycles,
+            end_name(t.end)
+        ))
+    }
 }
 
 fn closed_json(cf: Option<&ClosedForm>) -> Value {
@@ -319,7 +335,7 @@ fn trajectory_text(i: usize, t: &Trajectory, cf: Option<&ClosedForm>) -> String 
     }
     let period = t
         .period
-        .map_or("none detected (not settled or aperiodic)".into(), |p| {
+        .map_or("not settled (still converging, or aperiodic)".into(), |p| {
             p.to_string()
         });
     s += &format!("    period {period}\n");
