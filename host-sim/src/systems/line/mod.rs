@@ -67,16 +67,19 @@ impl Outcome for LineOutcome {
     }
 }
 
-/// The error of closing a loop through an external controller on a scene without one.
+/// The error of closing a loop through an external controller (`--hil`) on a scene
+/// without one: it names the mode (exit 2, before anything starts).
 fn needs_sil(scene: &Scene) -> SceneError {
-    let mode = match scene.control.mode {
-        ControlMode::None => "none",
-        ControlMode::IdealMirror => "ideal_mirror",
-        ControlMode::Sil => "sil",
+    let (mode, what) = match scene.control.mode {
+        ControlMode::None => ("none", "a passive scene"),
+        ControlMode::IdealMirror => ("ideal_mirror", "the ideal-mirror scene"),
+        ControlMode::Sil => ("sil", "this scene"),
     };
     SceneError::new(
         "control.mode",
-        format!("is \"{mode}\": an external controller (--hil) needs \"sil\""),
+        format!(
+            "is \"{mode}\": {what} has no controller to put on the target (--hil needs control.mode = \"sil\")"
+        ),
     )
 }
 
