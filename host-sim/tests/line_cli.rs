@@ -172,3 +172,42 @@ fn the_summary_names_what_ended_the_run() {
         "{text}"
     );
 }
+
+/// The line sweep says, per value, the period the run settled to and which limit ended it:
+/// just below the first doubling of eq. 8 (beta v*^2 = 1) a run cut short by its time
+/// limit is still settling, and is reported as not settled, never period 2; well inside
+/// the windows on either side the period is the attractor's.
+#[test]
+fn the_line_sweep_reports_settled_periods_and_the_end() {
+    // beta v*^2 = 0.9 kappa1 19.62: 1 at kappa1 = 0.056632
+    let kappa1 = |c: f64| c / (0.9 * 2.0 * 9.81);
+    let range = format!("control.kappa1_s2pm2={}:{}:3", kappa1(0.7), kappa1(0.998));
+    let out = common::ok(&[
+        "sweep",
+        &scene("line-juggler-chaotic"),
+        "--range",
+        &range,
+        "--set",
+        "stop.duration_s=100",
+        "--keep",
+        "8",
+    ]);
+    let csv = String::from_utf8(out.stdout).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("control.kappa1_s2pm2,period,end,apex_height_m")
+    );
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(rows.len(), 3 * 8);
+    // the time limit (100 s, about 110 impacts) ends every run before its 400 impacts
+    assert!(rows.iter().all(|r| r[2] == "duration"), "{csv}");
+    assert_eq!(rows[0][1], "1", "c = 0.7 settles fast: {csv}");
+    let near = &rows[16][1];
+    assert!(
+        near.is_empty(),
+        "c = 0.998 is still settling, not period {near}: {csv}"
+    );
+}
