@@ -328,6 +328,8 @@ fn sweeps_on_one_core_and_on_all_agree_byte_for_byte() {
 }
 
 /// The peak resident memory of `dexter args`, KiB (wait4's rusage of that child alone).
+// the child is waited for by wait4 itself, which std's Child cannot do with rusage
+#[allow(clippy::zombie_processes)]
 fn peak_rss_kib(args: &[&str]) -> i64 {
     let child = Command::new(env!("CARGO_BIN_EXE_dexter"))
         .args(args)

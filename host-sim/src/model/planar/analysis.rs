@@ -321,8 +321,8 @@ pub fn jacobian(model: &PlanarModel, z: &[f64], step_rel: f64) -> Result<Jacobia
         coarse: vec![vec![0.0; n]; n],
         error: 0.0,
     };
-    for j in 0..n {
-        let (fine, coarse, err) = column(model, z, j, step_rel * scales[j], f_scale).ok_or(
+    for (j, scale) in scales.iter().enumerate() {
+        let (fine, coarse, err) = column(model, z, j, step_rel * scale, f_scale).ok_or(
             PlanarError::Analysis("impact map failed near the fixed point at every step"),
         )?;
         for i in 0..n {
