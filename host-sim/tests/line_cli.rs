@@ -211,3 +211,26 @@ fn the_line_sweep_reports_settled_periods_and_the_end() {
         "c = 0.998 is still settling, not period {near}: {csv}"
     );
 }
+
+/// A long run shows a progress bar on a terminal (here a pseudo-terminal from `script`),
+/// towards the first of its limits; in a pipe it draws nothing.
+#[test]
+fn a_long_run_shows_a_progress_bar_on_a_terminal() {
+    let cmd = format!(
+        "{} run {} --impacts 20000",
+        env!("CARGO_BIN_EXE_dexter"),
+        scene("line-juggler")
+    );
+    let out = std::process::Command::new("script")
+        .args(["-qec", &cmd, "/dev/null"])
+        .output()
+        .expect("`script` (util-linux) runs");
+    let tty = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{tty}");
+    assert!(
+        tty.contains("% ") && tty.contains(" impacts, ") && tty.contains(" s simulated"),
+        "no progress bar on the terminal: {tty}"
+    );
+    let piped = dexter(&["run", &scene("line-juggler"), "--impacts", "20000"]);
+    assert!(stderr(&piped).is_empty(), "{}", stderr(&piped));
+}
