@@ -380,12 +380,31 @@ pub fn sensitivity(m: &[Vec<f64>], eig: &[Eigenvalue], delta: f64) -> Result<f64
                     .collect()
             })
             .collect();
-        let moved = super::eigen::eigenvalues(&p).ok_or(PlanarError::Analysis(
-            "eigenvalue iteration did not converge",
-        ))?;
+        let moved = eigenvalues_of(&p)?;
         worst = worst.max(match_max_diff(&moved, eig));
     }
     Ok(worst)
+}
+
+fn eigenvalues_of(m: &[Vec<f64>]) -> Result<Vec<(f64, f64)>, PlanarError> {
+    super::eigen::eigenvalues(m).ok_or(PlanarError::Analysis(
+        "eigenvalue iteration did not converge",
+    ))
+}
+
+/// The uncertainty of the eigenvalues `eig` of `jac` (module docs, "The verdict").
+fn uncertainty(jac: &Jacobian, eig: &[Eigenvalue]) -> Result<f64, PlanarError> {
+    let coarse = eigenvalues_of(&jac.coarse)?;
+    let scale = jac
+        .matrix
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    let delta = jac.error.max(ROUNDING_ULPS * f64::EPSILON * scale);
+    Ok(match_max_diff(&coarse, eig)
+        .max(sensitivity(&jac.matrix, eig, delta)?)
+        .max(jac.error.sqrt())
+        .max(VERDICT_FLOOR))
 }
 
 /// Linearize the model's impact-to-impact map at its fixed point (module docs) and compare
@@ -403,24 +422,11 @@ pub fn analyze(model: &PlanarModel) -> Result<AnalysisReport, PlanarError> {
         .zip(&z)
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     let jac = jacobian(model, &z, STEP_REL)?;
-    let eig_of = |m: &[Vec<f64>]| {
-        super::eigen::eigenvalues(m).ok_or(PlanarError::Analysis(
-            "eigenvalue iteration did not converge",
-        ))
-    };
-    let eig = eig_of(&jac.matrix)?;
-    let coarse = eig_of(&jac.coarse)?;
-    let eigenvalues: Vec<Eigenvalue> = eig.into_iter().map(Eigenvalue::from_pair).collect();
-    let scale = jac
-        .matrix
-        .iter()
-        .flatten()
-        .fold(0.0f64, |m, x| m.max(x.abs()));
-    let delta = jac.error.max(ROUNDING_ULPS * f64::EPSILON * scale);
-    let tol = match_max_diff(&coarse, &eigenvalues)
-        .max(sensitivity(&jac.matrix, &eigenvalues, delta)?)
-        .max(jac.error.sqrt())
-        .max(VERDICT_FLOOR);
+    let eigenvalues: Vec<Eigenvalue> = eigenvalues_of(&jac.matrix)?
+        .into_iter()
+        .map(Eigenvalue::from_pair)
+        .collect();
+    let tol = uncertainty(&jac, &eigenvalues)?;
     let g = model.gravity_mps2;
     let e = model.feedback.e();
     let ke = model.feedback.kappa_e_s2pm2();

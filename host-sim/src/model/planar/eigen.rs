@@ -169,7 +169,19 @@ pub fn eigenvalues(a: &[Vec<f64>]) -> Option<Vec<(f64, f64)>> {
             }
         })
         .collect();
-    // pair complex roots with their conjugates
+    pair_conjugates(&mut out);
+    out.sort_by(|a, b| {
+        let (ma, mb) = (a.0.hypot(a.1), b.0.hypot(b.1));
+        mb.total_cmp(&ma).then(b.1.total_cmp(&a.1))
+    });
+    Some(out)
+}
+
+/// Make the complex roots exact conjugate pairs: each root is paired with the nearest root
+/// of opposite imaginary sign if that is its conjugate to within [`PAIR_TOL`]; an unpaired
+/// root with an imaginary part below that is taken as real.
+fn pair_conjugates(out: &mut [(f64, f64)]) {
+    let n = out.len();
     let mut paired = vec![false; n];
     for i in 0..n {
         if paired[i] || out[i].1 == 0.0 {
@@ -202,11 +214,6 @@ pub fn eigenvalues(a: &[Vec<f64>]) -> Option<Vec<(f64, f64)>> {
             paired[j] = true;
         }
     }
-    out.sort_by(|a, b| {
-        let (ma, mb) = (a.0.hypot(a.1), b.0.hypot(b.1));
-        mb.total_cmp(&ma).then(b.1.total_cmp(&a.1))
-    });
-    Some(out)
 }
 
 #[cfg(test)]
