@@ -166,6 +166,18 @@ fn the_summary_names_what_ended_the_run() {
         json(&["run", &scene("passive-bounce"), "--json"])["end"],
         "resting"
     );
+    // a resting contact forced by the Zeno cap says so; a detected one does not
+    let v = json(&[
+        "run",
+        &scene("line-juggler"),
+        "--set",
+        "zeno.max_impacts_per_segment=1",
+        "--json",
+    ]);
+    assert_eq!(v["resting_forced"], true, "{v}");
+    assert!(json(&["run", &scene("passive-bounce"), "--json"])
+        .get("resting_forced")
+        .is_none());
     let text = String::from_utf8(common::ok(&["run", &ideal, "--duration", "3"]).stdout).unwrap();
     assert!(
         text.contains("ended            at the time limit"),

@@ -106,6 +106,10 @@ pub struct Summary {
     pub resting_since_s: Option<f64>,
     /// Impacts before the first resting contact.
     pub resting_after_impacts: Option<u64>,
+    /// True if a resting contact was forced by the cap `zeno.max_impacts_per_segment`
+    /// rather than detected (present only then).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub resting_forced: bool,
     /// Grazing contacts (zero relative speed).
     pub grazing_contacts: u64,
     /// Which limit ended the run: `impacts` (the requested impacts), `duration` (the time
@@ -169,6 +173,7 @@ impl Summary {
             resting_contact: out.rest_count > 0,
             resting_since_s: first_rest.map(|r| r.time_s),
             resting_after_impacts: first_rest.map(|r| r.after_impacts),
+            resting_forced: out.rests.iter().any(|r| r.forced),
             grazing_contacts: out.grazing_contacts,
             end: out.end,
             safe: out.safe.clone(),
@@ -217,6 +222,10 @@ impl Summary {
                 _ => "no".to_string(),
             }
         );
+        if self.resting_forced {
+            s +=
+                "                 (forced: zeno.max_impacts_per_segment impacts within one step)\n";
+        }
         s += &format!("impacts          {}\n", self.impacts);
         s += &format!("ended            {}\n", self.end_text());
         if self.control_steps > 0 {
