@@ -574,3 +574,35 @@ pub fn stability_map(
     }
     Ok(rows)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An ill-conditioned Jacobian (a huge coupling beside a near-double eigenvalue) whose
+    /// coarse twin agrees with it: the uncertainty must still cover how far its eigenvalues
+    /// move under an entry error of the Jacobian's size (sqrt(1e-12 x 1e8) = 0.01 here).
+    #[test]
+    fn the_uncertainty_covers_ill_conditioned_eigenvalues() {
+        let m = vec![vec![1.0, 1e8], vec![0.0, 1.0 + 1e-9]];
+        let jac = Jacobian {
+            matrix: m.clone(),
+            coarse: m.clone(),
+            error: 1e-12,
+        };
+        let eig: Vec<Eigenvalue> = eigenvalues_of(&m)
+            .unwrap()
+            .into_iter()
+            .map(Eigenvalue::from_pair)
+            .collect();
+        let tol = uncertainty(&jac, &eig).unwrap();
+        // the lower-left entry at 1e-12: eigenvalues 1 +- sqrt(1e-12 x 1e8) = 1 +- 0.01
+        let mut moved = m.clone();
+        moved[1][0] = 1e-12;
+        let shifted = eigenvalues_of(&moved).unwrap();
+        let d = match_max_diff(&shifted, &eig);
+        assert!(d > 5e-3, "{d}");
+        assert!(tol >= d, "uncertainty {tol} < movement {d}");
+        assert!(Verdict::of(1.0, tol) == Verdict::Unreliable);
+    }
+}
