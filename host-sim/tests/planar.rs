@@ -859,3 +859,81 @@ fn accuracy_and_its_cost() {
         );
     }
 }
+
+/// The streamed run statistics (constant memory) equal the same figures computed on every
+/// impact of the run, kept whole: the late quarter's mean energy and max angle, the early
+/// quarter's amplitude through the class, for runs that complete and runs that end early.
+#[test]
+fn streamed_statistics_equal_the_whole_run() {
+    use dexter_sim::model::planar::stats::RunStats;
+    let cases: [(&str, f64, usize); 5] = [
+        ("triangle", 1.1, 300),
+        ("triangle", 1.1, 7),
+        ("triangle", 5.0, 300), // no separation at once
+        ("friction", 1.1, 300), // tips over early
+        ("triangle-noise", 1.1, 301),
+    ];
+    for (name, kappa, impacts) in cases {
+        let mut p = scene(name);
+        p.kappa = kappa;
+        p.impacts = impacts;
+        let model = p.build().unwrap();
+        let run = model.run(p.start().unwrap(), impacts, p.seed);
+        let mut stats = RunStats::new(&model, impacts);
+        let done = model.run_streaming(p.start().unwrap(), impacts, p.seed, &mut |r| stats.push(r));
+        assert_eq!(
+            (done.end, done.impacts),
+            (run.end, run.impacts.len()),
+            "{name}"
+        );
+        let n = run.impacts.len();
+        let late = &run.impacts[n - (n / 4).max(1).min(n)..];
+        let l = stats.late();
+        assert_eq!(l.impacts, late.len(), "{name} {impacts}");
+        if !late.is_empty() {
+            let mean = late.iter().map(|r| r.energy_jpkg).sum::<f64>() / late.len() as f64;
+            assert!(
+                (l.mean_energy_jpkg - mean).abs() <= 1e-12 * mean.abs(),
+                "{name}"
+            );
+            let max = late
+                .iter()
+                .fold(0.0f64, |m, r| m.max(r.before.theta_rad.abs()));
+            assert_eq!(l.max_abs_theta_rad, max, "{name}");
+        }
+        // the class, written out from the paper's definition on the whole run
+        let eta = model.feedback.target_energy_jpkg();
+        let want = if run
+            .impacts
+            .iter()
+            .any(|r| r.energy_jpkg.is_nan() || r.energy_jpkg > 100.0 * eta)
+        {
+            CellClass::Diverges
+        } else if run.end == RunEnd::TippedOver {
+            CellClass::TipsOver
+        } else if run.end != RunEnd::Completed {
+            CellClass::Diverges
+        } else if n < 4 {
+            CellClass::Drifts
+        } else {
+            let q = n / 4;
+            let amp = |rs: &[dexter_sim::model::planar::ImpactRecord]| {
+                rs.iter()
+                    .fold(0.0f64, |m, r| m.max(r.before.theta_rad.abs()))
+            };
+            let mean = run.impacts[n - q..]
+                .iter()
+                .map(|r| r.energy_jpkg)
+                .sum::<f64>()
+                / q as f64;
+            let settled = (mean - eta).abs() <= 0.02 * eta;
+            if settled && amp(&run.impacts[n - q..]) <= 1.1 * amp(&run.impacts[..q]) {
+                CellClass::Converges
+            } else {
+                CellClass::Drifts
+            }
+        };
+        assert_eq!(stats.class(done.end), want, "{name} {impacts}");
+        assert_eq!(classify(&model, &run), want, "{name} {impacts}");
+    }
+}
