@@ -94,6 +94,9 @@ struct RunArgs {
     /// Fraction of host-to-device bytes corrupted for --hil, in [0, 1].
     #[arg(long, value_name = "F", requires = "hil")]
     corrupt_rate: Option<f64>,
+    /// --hil on a real board on this serial port (e.g. /dev/ttyACM0) instead of QEMU.
+    #[arg(long, value_name = "PATH", requires = "hil", conflicts_with_all = ["firmware", "link"])]
+    port: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -195,6 +198,7 @@ fn main() -> ExitCode {
                 link: None,
                 budget: None,
                 corrupt_rate: None,
+                port: None,
             })
         }
     };
@@ -308,6 +312,7 @@ fn run_hil(scene: &Scene, options: &RunOptions, args: &RunArgs) -> Result<RunOut
             Link::Uart => hil::LinkKind::Uart,
         };
     }
+    opts.serial = args.port.clone().map(hil::SerialPortOptions::new);
     if let Some(b) = args.budget {
         opts.instruction_budget = (b > 0).then_some(b).into();
     }
