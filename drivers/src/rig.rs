@@ -167,13 +167,16 @@ mod tests {
     #[test]
     fn sense_builds_the_cores_frame_and_actuate_drives_the_motor() {
         // encoder: 0 at start, then +100 counts (10 mm at 0.1 mm/count) each period
-        let counts = Counts(vec![0, 100, 200, 300].into_iter());
+        let counts = Counts(vec![0, 100, 200, 300, 400].into_iter());
         let encoder = PaddleEncoder::new(counts, 1e-4, 0.0, 0.002).unwrap();
         // camera: image 5 at row 300 (1 m above row 400 at 1 cm/px), then nothing, then
-        // image 5 again and image 6 without the ball in one poll (the newest counts)
+        // image 5 again (a repeat is not a new image), then image 5 again and image 6
+        // without the ball in one poll (the newest counts)
         let mut uart = SerialMock::new(&[
             Serial::read_many(image(5, 300.0)),
             Serial::read_error(nb::Error::WouldBlock),
+            Serial::read_error(nb::Error::WouldBlock),
+            Serial::read_many(image(5, 300.0)),
             Serial::read_error(nb::Error::WouldBlock),
             Serial::read_many(image(5, 300.0)),
             Serial::read_many(
@@ -220,10 +223,12 @@ mod tests {
         let f = rig.sense(); // no new image: seq stands still, the last height stays
         assert_eq!(f.seq, 1);
         assert!((f.ball_height_m - 1.0).abs() < 1e-6);
+        let f = rig.sense(); // image 5 repeated: no new sample
+        assert_eq!(f.seq, 1);
         let f = rig.sense(); // image 5 repeated, then image 6 without a ball
         assert_eq!(f.seq, 2);
         assert!(f.ball_height_m.is_nan());
-        assert_eq!(rig.camera_stats().frames, 3);
+        assert_eq!(rig.camera_stats().frames, 4);
         uart.done();
         pwm.done();
         pin.done();
