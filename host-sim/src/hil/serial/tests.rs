@@ -10,7 +10,7 @@ use super::*;
 use crate::controller::StepController;
 use dexter_core::control::{Controller, ControllerParams};
 use dexter_core::echo::{Echo, EchoFrame, EchoParams};
-use dexter_core::fixed_rate::Reply;
+use dexter_core::fixed_rate::{FixedRate, Reply};
 use dexter_core::protocol::{
     encode, DeviceMessage, Fault, FrameDecoder, HostMessage, RunSummary, SensorFrame, Telemetry,
     Wire, MAX_FRAME_LEN,
@@ -72,8 +72,19 @@ struct Device<C: Wire> {
     timeouts: u32,
 }
 
-impl<C: Wire> Device<C> {
+impl<C: Wire + Send + 'static> Device<C> {
     fn serve(io: File) -> JoinHandle<RunSummary> {
+        Self::serve_from(io, |_| {})
+    }
+
+    /// Serve from a state `setup` puts the device in (e.g. mid-session).
+    fn serve_from(
+        io: File,
+        setup: impl FnOnce(&mut Self) + Send + 'static,
+    ) -> JoinHandle<RunSummary>
+    where
+        C: Send + 'static,
+    {
         std::thread::spawn(move || {
             let mut d = Device::<C> {
                 io,
@@ -84,6 +95,7 @@ impl<C: Wire> Device<C> {
                 steps: 0,
                 timeouts: 0,
             };
+            setup(&mut d);
             d.run()
         })
     }
@@ -249,6 +261,35 @@ fn leftovers_of_an_earlier_session_are_discarded_before_configure() {
     hil.step(&EchoFrame { seq: 1, value: 2.0 }).expect("step");
     hil.finish().expect("clean end");
     device.join().unwrap();
+}
+
+#[test]
+fn a_board_left_mid_session_answers_the_flush_and_the_answer_is_discarded() {
+    let pty = pty();
+    // A board whose host died mid-frame: configured, half a frame in its decoder. The
+    // host's flush delimiter completes that frame, which the board answers with its safe
+    // command, after the host cleared its buffers: resync must drain it.
+    let device = Device::<Echo>::serve_from(pty.master.try_clone().unwrap(), |d| {
+        d.controller = Echo::new(EchoParams::default()).ok();
+        let mut frame = [0u8; MAX_FRAME_LEN];
+        let n = encode(
+            &HostMessage::Sensor(Echo::frame(EchoFrame { seq: 9, value: 1.0 })),
+            &mut frame,
+        )
+        .unwrap();
+        for &b in &frame[..n / 2] {
+            assert!(d.decoder.push::<HostMessage>(b).is_none());
+        }
+    });
+    let mut hil = LockStep::<Echo>::start(EchoParams::default(), options(&pty.path))
+        .expect("the late safe answer must not be taken for Configured");
+    hil.step(&EchoFrame { seq: 1, value: 2.0 }).expect("step");
+    hil.finish().expect("clean end");
+    assert_eq!(
+        device.join().unwrap().link_timeouts,
+        1,
+        "the flushed partial frame"
+    );
 }
 
 #[test]
