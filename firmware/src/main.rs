@@ -3,7 +3,7 @@
 //! - `semihosting`: lock-step server on the semihosting file link;
 //! - `uart`: lock-step server on UART0;
 //! - `freerun`: free-running fixed-rate mode on UART0 (500 Hz on SysTick, link timeout
-//!   after 5 periods without a valid frame), the loop a real board runs;
+//!   after 5 periods without a valid frame): a board fed sensor frames over its link;
 //! - `fault-panic`, `fault-hardfault`, `fault-stack-overflow`: test hooks that panic,
 //!   execute `udf`, or recurse past the reserved stack, to check that each ends the QEMU run
 //!   with a failure status;

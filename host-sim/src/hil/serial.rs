@@ -4,7 +4,7 @@
 //! [`SerialPortOptions`] in [`HilOptions::serial`](super::HilOptions::serial) selects it;
 //! `LockStep::<C>::start` then opens the port (raw 8N1 at the given rate, exclusive, through
 //! the `serialport` crate), clears what the board may still hold from an earlier session
-//! ([`resync`]: a lone frame delimiter, then whatever arrives is discarded), and runs the
+//! (`resync`: a lone frame delimiter, then whatever arrives is discarded), and runs the
 //! protocol exactly as over QEMU's UART: the host end is a file descriptor read with
 //! `poll(2)`, like the FIFO of the semihosting link.
 //!
