@@ -43,6 +43,7 @@ cargo fmt --all -- --check
 step "lints (cargo clippy -D warnings), host crates and firmware"
 cargo clippy --all-targets -- -D warnings
 cargo clippy -p dexter-firmware --target "$TARGET" -- -D warnings
+cargo clippy -p dexter-nucleo-f446re --target "$TARGET" -- -D warnings
 
 step "the core builds for $TARGET with each math backend"
 cargo build -p dexter-core --target "$TARGET"
@@ -51,7 +52,10 @@ cargo build -p dexter-core --target "$TARGET" --features fast-math
 step "the firmware builds for $TARGET (release)"
 cargo build -p dexter-firmware --release --target "$TARGET"
 
-step "unit, property, paper-reproduction and HIL tests (cargo test)"
+step "the NUCLEO-F446RE image builds for $TARGET (release); its sizes are checked by tests/board.rs"
+cargo build -p dexter-nucleo-f446re --release --target "$TARGET"
+
+step "unit, property, paper-reproduction, driver (embedded-hal-mock), HIL and board-size tests (cargo test)"
 cargo test --all-targets
 
 step "documentation builds without warnings"
