@@ -19,13 +19,8 @@ use crate::rig::Rig;
 use dexter_core::fixed_rate::{FixedRate, Reply};
 use dexter_core::protocol::{Fault, Mode};
 
-/// The fault code an overrun's safe command carries.
-///
-/// The core's `Fault` has no overrun code yet (adding one is a change to `shared/`, the
-/// wire's `Fault` enum: `Overrun = 5`), so the closest existing code is used: an overrun
-/// means the command answers a sample older than one period, which is what
-/// [`Fault::Stale`] says. The board's log and [`PeriodStats::overruns`] tell the two apart.
-pub const OVERRUN_FAULT: Fault = Fault::Stale;
+/// The fault code an overrun's safe command carries: [`Fault::Overrun`].
+pub const OVERRUN_FAULT: Fault = Fault::Overrun;
 
 /// The tick and the cycle counter of a board.
 pub trait PeriodClock {
