@@ -152,6 +152,10 @@ pub struct Grasp {
     pub cop_m: f64,
     /// Edge length L, m.
     pub edge_length_m: f64,
+    /// Centre of mass, world, m.
+    pub com: V2,
+    /// Contact force, world, N/kg.
+    pub force_world: V2,
 }
 
 /// A roll's pivot: which vertex, where, and which way.
@@ -209,6 +213,8 @@ impl Rig {
             force,
             cop_m,
             edge_length_m: self.body.edge_length_m(p.edge),
+            com: r,
+            force_world: f,
         }
     }
 
