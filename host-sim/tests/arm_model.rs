@@ -295,7 +295,7 @@ fn a_roll_lands_on_the_next_edge_where_the_geometry_says() {
         // the rolled body at psi = dir * gamma equals the grasped body on the new edge
         let rolled = r.rolling_state(&pv, dir * pv.gamma_rad, 0.0, &j);
         let grasped = r.grasped_state(&land, &j);
-        assert!(rolled.com.sub(grasped.com).norm() < 1e-12, "dir {dir}");
+        assert!(rolled.com.minus(grasped.com).norm() < 1e-12, "dir {dir}");
         let da = rolled.angle_rad - grasped.angle_rad;
         assert!((da - std::f64::consts::TAU * (da / std::f64::consts::TAU).round()).abs() < 1e-12);
         assert!((r.impact_speed_mps(&pv, -2.0) - 0.2).abs() < 1e-12);

@@ -82,7 +82,7 @@ impl Joint {
         let w = self.position(p);
         w.perp()
             .scale(self.accel_radps2)
-            .sub(w.scale(self.velocity_radps * self.velocity_radps))
+            .minus(w.scale(self.velocity_radps * self.velocity_radps))
     }
 }
 
@@ -197,18 +197,18 @@ impl Rig {
     /// Centre of mass in the arm frame for a placement, m.
     pub fn com_arm(&self, p: &Placement) -> V2 {
         let v = self.body.vertex(p.edge).rotate(self.alpha_rad(p.edge));
-        self.surface.point(p.sigma_m).sub(v)
+        self.surface.point(p.sigma_m).minus(v)
     }
 
     /// The dynamic-grasp force and centre of pressure (module docs).
     pub fn grasp(&self, p: &Placement, j: &Joint) -> Grasp {
         let r_arm = self.com_arm(p);
         let r = j.position(r_arm);
-        let f = j.point_accel(r_arm).add(up(self.gravity_mps2));
+        let f = j.point_accel(r_arm).plus(up(self.gravity_mps2));
         let force = surface_axes(&self.surface, j.angle_rad, f);
         let pk = j.position(self.surface.point(p.sigma_m));
         let rho2 = self.body.rho_m * self.body.rho_m;
-        let cop_m = (rho2 * j.accel_radps2 - pk.sub(r).cross(f)) / force.normal;
+        let cop_m = (rho2 * j.accel_radps2 - pk.minus(r).cross(f)) / force.normal;
         Grasp {
             force,
             cop_m,
@@ -252,15 +252,17 @@ impl Rig {
         let a_p = j.point_accel(p_arm);
         let d = j.position(self.pivot_to_com_arm(pv, psi_rad));
         let rho2 = self.body.rho_m * self.body.rho_m;
-        let phi_dd = -d.cross(a_p.add(up(self.gravity_mps2))) / (rho2 + d.norm2());
+        let phi_dd = -d.cross(a_p.plus(up(self.gravity_mps2))) / (rho2 + d.norm2());
         let phi_d = j.velocity_radps + psi_dot_radps;
-        let com_accel = a_p.add(d.perp().scale(phi_dd)).sub(d.scale(phi_d * phi_d));
-        let f = com_accel.add(up(self.gravity_mps2));
+        let com_accel = a_p
+            .plus(d.perp().scale(phi_dd))
+            .minus(d.scale(phi_d * phi_d));
+        let f = com_accel.plus(up(self.gravity_mps2));
         RollRate {
             psi_accel_radps2: phi_dd - j.accel_radps2,
             phi_accel_radps2: phi_dd,
             force: surface_axes(&self.surface, j.angle_rad, f),
-            com: j.position(p_arm).add(d),
+            com: j.position(p_arm).plus(d),
             com_accel,
         }
     }
@@ -307,9 +309,9 @@ impl BodyState {
         Self {
             com: self
                 .com
-                .add(self.velocity.scale(t_s))
-                .sub(V2::new(0.0, 0.5 * g * t_s * t_s)),
-            velocity: self.velocity.sub(V2::new(0.0, g * t_s)),
+                .plus(self.velocity.scale(t_s))
+                .minus(V2::new(0.0, 0.5 * g * t_s * t_s)),
+            velocity: self.velocity.minus(V2::new(0.0, g * t_s)),
             angle_rad: self.angle_rad + self.angular_velocity_radps * t_s,
             angular_velocity_radps: self.angular_velocity_radps,
         }
@@ -317,7 +319,7 @@ impl BodyState {
 
     /// World position of body-frame point `b`, m.
     pub fn point(&self, b: V2) -> V2 {
-        self.com.add(b.rotate(self.angle_rad))
+        self.com.plus(b.rotate(self.angle_rad))
     }
 }
 
@@ -345,8 +347,8 @@ impl Rig {
         let d = j.position(self.pivot_to_com_arm(pv, psi_rad));
         let phi_d = j.velocity_radps + psi_dot_radps;
         BodyState {
-            com: j.position(p_arm).add(d),
-            velocity: j.point_velocity(p_arm).add(d.perp().scale(phi_d)),
+            com: j.position(p_arm).plus(d),
+            velocity: j.point_velocity(p_arm).plus(d.perp().scale(phi_d)),
             angle_rad: j.angle_rad + pv.alpha0_rad + psi_rad,
             angular_velocity_radps: phi_d,
         }
@@ -382,5 +384,5 @@ impl ArmInertia {
 /// Gravity's balancing force `(0, g)` plus `a`: the contact force per unit mass for a
 /// centre-of-mass acceleration `a`, N/kg.
 pub fn contact_force_world(a: V2, g: f64) -> V2 {
-    a.add(up(g))
+    a.plus(up(g))
 }

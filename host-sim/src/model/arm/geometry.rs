@@ -28,11 +28,11 @@ impl V2 {
         Self::new(a.cos(), a.sin())
     }
     /// Sum.
-    pub fn add(self, o: Self) -> Self {
+    pub fn plus(self, o: Self) -> Self {
         Self::new(self.x + o.x, self.y + o.y)
     }
     /// Difference.
-    pub fn sub(self, o: Self) -> Self {
+    pub fn minus(self, o: Self) -> Self {
         Self::new(self.x - o.x, self.y - o.y)
     }
     /// Scaled by `k`.
@@ -98,12 +98,12 @@ impl Polygon {
 
     /// Edge `k` runs from vertex `k` to vertex `k + 1`; its length, m.
     pub fn edge_length_m(&self, k: usize) -> f64 {
-        self.vertex(k + 1).sub(self.vertex(k)).norm()
+        self.vertex(k + 1).minus(self.vertex(k)).norm()
     }
 
     /// Direction angle of edge `k` in the body frame, rad.
     pub fn edge_angle_rad(&self, k: usize) -> f64 {
-        let d = self.vertex(k + 1).sub(self.vertex(k));
+        let d = self.vertex(k + 1).minus(self.vertex(k));
         d.y.atan2(d.x)
     }
 
@@ -128,7 +128,7 @@ impl Polygon {
             let (a, b) = (vertices[i], vertices[(i + 1) % n]);
             let w = a.cross(b); // twice the signed area of triangle (0, a, b)
             area2 += w;
-            c = c.add(a.add(b).scale(w / 3.0));
+            c = c.plus(a.plus(b).scale(w / 3.0));
             j2 += w * (a.dot(a) + a.dot(b) + b.dot(b)) / 6.0;
         }
         if area2 <= 0.0 {
@@ -138,10 +138,10 @@ impl Polygon {
         // plate: J_origin = sum w (a.a + a.b + b.b) / 12 ; per unit area / (area2 / 2)
         let rho2_origin = j2 / area2;
         let rho_plate = (rho2_origin - c.norm2()).max(0.0).sqrt();
-        let vertices: Vec<V2> = vertices.iter().map(|v| v.sub(c)).collect();
+        let vertices: Vec<V2> = vertices.iter().map(|v| v.minus(c)).collect();
         for i in 0..n {
             let (a, b, d) = (vertices[i], vertices[(i + 1) % n], vertices[(i + 2) % n]);
-            if b.sub(a).cross(d.sub(b)) <= 0.0 {
+            if b.minus(a).cross(d.minus(b)) <= 0.0 {
                 return Err("vertices must form a strictly convex counterclockwise polygon");
             }
         }
@@ -199,15 +199,15 @@ impl Surface {
     }
     /// Arm-frame point at surface coordinate `sigma_m`.
     pub fn point(&self, sigma_m: f64) -> V2 {
-        self.origin.add(self.tangent().scale(sigma_m))
+        self.origin.plus(self.tangent().scale(sigma_m))
     }
     /// Signed height of arm-frame point `p` above the surface line, m.
     pub fn height_m(&self, p: V2) -> f64 {
-        p.sub(self.origin).dot(self.normal())
+        p.minus(self.origin).dot(self.normal())
     }
     /// Surface coordinate of the foot of arm-frame point `p`, m.
     pub fn sigma_m(&self, p: V2) -> f64 {
-        p.sub(self.origin).dot(self.tangent())
+        p.minus(self.origin).dot(self.tangent())
     }
 }
 
@@ -255,7 +255,7 @@ mod tests {
             beta_rad: std::f64::consts::FRAC_PI_4,
             length_m: 0.3,
         };
-        let p = s.point(0.2).add(s.normal().scale(0.03));
+        let p = s.point(0.2).plus(s.normal().scale(0.03));
         assert!((s.height_m(p) - 0.03).abs() < 1e-15 && (s.sigma_m(p) - 0.2).abs() < 1e-15);
     }
 }

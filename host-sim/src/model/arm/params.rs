@@ -229,7 +229,7 @@ impl Default for PlannerTable {
             roll_steps: 48,
             max_evaluations: 1000,
             solver: Solver::Slsqp,
-            phase_time_min_s: 0.05,
+            phase_time_min_s: 0.02,
             phase_time_max_s: 1.5,
             mu_max: 3.0,
             friction_margin: 0.01,

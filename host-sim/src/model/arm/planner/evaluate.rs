@@ -341,7 +341,7 @@ impl<'a> Problem<'a> {
                     pv.gamma_rad,
                 );
             }
-            let f = r.com_accel.add(V2::new(0.0, rig.gravity_mps2));
+            let f = r.com_accel.plus(V2::new(0.0, rig.gravity_mps2));
             let tau = self.sys.arm.torque_nm(&j) + self.load(r.com, f, r.phi_accel_radps2);
             self.torque(t, tau, sink, &mut tq);
             if let Some(tr) = sink.trace.as_mut() {
@@ -388,8 +388,8 @@ impl<'a> Problem<'a> {
         for (b, p_arm) in pts {
             let u = b.rotate(s0.angle_rad);
             let w = s0.angular_velocity_radps;
-            let a_obj = V2::new(0.0, -g).sub(u.scale(w * w));
-            let sep = a_obj.sub(brake.point_accel(*p_arm)).dot(n);
+            let a_obj = V2::new(0.0, -g).minus(u.scale(w * w));
+            let sep = a_obj.minus(brake.point_accel(*p_arm)).dot(n);
             sink.push(Kind::Release, (1.0 - sep) / g);
         }
         let stop = m.joint(m.settled_s()).angle_rad;

@@ -140,10 +140,31 @@ impl Layout {
         }
     }
 
+    /// The design vector of a full control polygon (its fixed points ignored), phase
+    /// times and mu, clamped into the bounds.
+    pub fn encode(&self, points_rad: &[f64], times_s: &[f64], mu: f64) -> Vec<f64> {
+        let n = self.knots;
+        let mut x: Vec<f64> = match self.end {
+            End::Free => points_rad[3..n].to_vec(),
+            End::Rest(..) => {
+                let mut v = points_rad[3..n - 3].to_vec();
+                v.push(points_rad[n - 1]);
+                v
+            }
+            End::Fixed(_) => points_rad[3..n - 3].to_vec(),
+        };
+        x.extend_from_slice(times_s);
+        x.push(mu);
+        x.iter()
+            .zip(self.bounds())
+            .map(|(v, (lo, hi))| v.clamp(lo, hi))
+            .collect()
+    }
+
     /// Initial guess number `k`: a windup of `w` rad opposite to a swing of `a` rad,
     /// the swing's sign alternating between guesses; phases of a few tenths of a second.
     pub fn guess(&self, kind: TaskKind, k: usize) -> Vec<f64> {
-        let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+        let sign = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
         let windup = [0.15, 0.3, 0.0, 0.45][(k / 2) % 4];
         let swing = match kind {
             TaskKind::Throw | TaskKind::RollingThrow => 0.8,

@@ -6,6 +6,7 @@
 
 pub mod evaluate;
 pub mod layout;
+pub mod seed;
 pub mod solve;
 
 use super::motion::PlannedMotion;
@@ -50,8 +51,12 @@ pub struct Plan {
     pub segment_s: f64,
     /// The phases in order (a flight starts at the release).
     pub phases: Vec<PhaseSpan>,
-    /// The friction coefficient the plan needs (the design variable at the optimum).
+    /// The friction coefficient the plan needs: the design variable at the optimum, or
+    /// the peak friction ratio the verifier finds along the whole trajectory if that is
+    /// higher (the program samples the phases; the verifier steps every 0.1 ms).
     pub mu: f64,
+    /// The design variable mu at the optimum (what the sampled program needs).
+    pub mu_sampled: f64,
     /// Objective value.
     pub objective: f64,
     /// Normal speed of the roll-end impact, m/s (0 without one).
@@ -114,8 +119,13 @@ pub fn plan(sys: &ArmSystem) -> Result<Plan, ArmError> {
     let (mut iterations, mut evaluations) = (0, 0);
     let mut best: Option<(usize, solve::Solved, f64)> = None;
     let mut least_bad: (f64, Option<Kind>, String) = (f64::INFINITY, None, String::new());
-    for k in 0..sys.planner.starts {
-        let x0 = problem.layout.guess(sys.task.kind, k);
+    // shot seeds first, then the plain guesses: SQP's local optima differ by start
+    let mut starts = seed::seeds(&problem, sys.planner.starts);
+    let shot = starts.len();
+    for k in 0..sys.planner.starts.saturating_sub(shot).max(2) {
+        starts.push(problem.layout.guess(sys.task.kind, k));
+    }
+    for (k, x0) in starts.into_iter().enumerate() {
         let s = match sys.planner.solver {
             Solver::Slsqp => solve::slsqp(&problem, &x0, &bounds, sys.planner.max_evaluations),
             Solver::Alm => solve::alm(&problem, &x0, &bounds, sys.planner.max_evaluations),
@@ -144,6 +154,15 @@ pub fn plan(sys: &ArmSystem) -> Result<Plan, ArmError> {
     };
     let e = problem.evaluate(&s.x, true);
     let d = problem.layout.decode(&s.x);
+    let dense = super::simulate::execute_with(
+        sys,
+        &problem.motion(&d),
+        f64::INFINITY,
+        super::simulate::SimOptions {
+            record: false,
+            ..Default::default()
+        },
+    );
     let mut t0 = 0.0;
     let phases = problem
         .layout
@@ -166,7 +185,8 @@ pub fn plan(sys: &ArmSystem) -> Result<Plan, ArmError> {
         points_rad: d.points_rad,
         segment_s: d.segment_s,
         phases,
-        mu: d.mu,
+        mu: d.mu.max(dense.peak_friction_ratio * (1.0 + 1e-9)),
+        mu_sampled: d.mu,
         objective: e.objective,
         impact_speed_mps: e.impact_speed_mps,
         iterations,

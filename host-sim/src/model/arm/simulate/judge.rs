@@ -41,7 +41,7 @@ impl Runner<'_> {
         let got = rig.grasped_state(&p, &j_end);
         let goal = rig.grasped_state(&want, &j_goal);
         self.out.goal_error = Some(GoalError {
-            position_m: got.com.sub(goal.com).norm(),
+            position_m: got.com.minus(goal.com).norm(),
             angle_rad: wrap_pi(got.angle_rad - goal.angle_rad),
         });
         if p.edge == want.edge {

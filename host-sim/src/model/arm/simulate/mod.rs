@@ -51,8 +51,8 @@ pub enum Executed {
 pub struct Event {
     /// When, s.
     pub t_s: f64,
-    /// What: `roll_start`, `roll_end`, `roll_back`, `release`, `slip`, `separation`,
-    /// `landing`, `arm_strike`, `table`.
+    /// What: `roll_start_ccw`, `roll_start_cw`, `roll_end`, `roll_back`, `release`,
+    /// `slip`, `separation`, `landing`, `arm_strike`, `table`.
     pub kind: &'static str,
 }
 
@@ -110,6 +110,26 @@ pub struct Execution {
     pub goal_error: Option<GoalError>,
     /// Normal speed of a roll's landing, m/s.
     pub impact_speed_mps: Option<f64>,
+    /// The object's state at a throw's release.
+    pub release: Option<BodyState>,
+}
+
+/// Integration step and recording of a run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimOptions {
+    /// Step, s.
+    pub step_s: f64,
+    /// Keep frames and friction samples.
+    pub record: bool,
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        Self {
+            step_s: STEP_S,
+            record: true,
+        }
+    }
 }
 
 /// The object's contact state.
@@ -127,9 +147,20 @@ enum State {
     },
 }
 
-/// Run `motion` against the object with friction coefficient `mu`.
+/// Run `motion` against the object with friction coefficient `mu` (0.1 ms steps,
+/// frames and friction recorded).
 pub fn execute(sys: &ArmSystem, motion: &dyn ArmMotion, mu: f64) -> Execution {
-    let mut run = Runner::new(sys, motion, mu);
+    execute_with(sys, motion, mu, SimOptions::default())
+}
+
+/// [`execute`] with a chosen step and recording.
+pub fn execute_with(
+    sys: &ArmSystem,
+    motion: &dyn ArmMotion,
+    mu: f64,
+    opt: SimOptions,
+) -> Execution {
+    let mut run = Runner::new(sys, motion, mu, opt);
     run.go();
     run.finish()
 }
@@ -146,10 +177,11 @@ struct Runner<'a> {
     verdict: Option<(Executed, String)>,
     breaks: Vec<f64>,
     table_y: f64,
+    opt: SimOptions,
 }
 
 impl<'a> Runner<'a> {
-    fn new(sys: &'a ArmSystem, arm: &'a dyn ArmMotion, mu: f64) -> Self {
+    fn new(sys: &'a ArmSystem, arm: &'a dyn ArmMotion, mu: f64, opt: SimOptions) -> Self {
         let mut breaks = arm.breaks_s();
         breaks.sort_by(f64::total_cmp);
         let s0 = sys.rig.grasped_state(&sys.start, &arm.joint(0.0));
@@ -176,12 +208,14 @@ impl<'a> Runner<'a> {
                 peak_friction_ratio: 0.0,
                 goal_error: None,
                 impact_speed_mps: None,
+                release: None,
             },
             next_frame: 0.0,
             next_friction: 0.0,
             verdict: None,
             breaks,
             table_y,
+            opt,
         }
     }
 
@@ -206,7 +240,7 @@ impl<'a> Runner<'a> {
 
     /// The next step's end: `STEP_S` on, or the next break if that comes first.
     fn step_end(&self) -> f64 {
-        let t1 = self.t + STEP_S;
+        let t1 = self.t + self.opt.step_s;
         self.breaks
             .iter()
             .copied()

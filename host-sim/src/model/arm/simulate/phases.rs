@@ -33,7 +33,14 @@ impl Runner<'_> {
             }
             Some((te, GraspEvent::Tips(dir))) => {
                 self.t = te;
-                self.event(te, "roll_start");
+                self.event(
+                    te,
+                    if dir > 0.0 {
+                        "roll_start_ccw"
+                    } else {
+                        "roll_start_cw"
+                    },
+                );
                 self.state = State::Roll {
                     pivot: rig.pivot(&p, dir),
                     from: p,
@@ -87,6 +94,7 @@ impl Runner<'_> {
     fn leave(&mut self, te: f64, s: BodyState) {
         if self.sys.task.kind.throws() && te >= self.arm.release_s() - 1e-3 {
             self.event(te, "release");
+            self.out.release = Some(s);
             self.state = State::Flight { t0: te, start: s };
         } else {
             self.event(te, "separation");
@@ -111,7 +119,7 @@ impl Runner<'_> {
                     let err = GoalError {
                         position_m: s
                             .com
-                            .sub(crate::model::arm::geometry::V2::new(goal.x_m, goal.y_m))
+                            .minus(crate::model::arm::geometry::V2::new(goal.x_m, goal.y_m))
                             .norm(),
                         angle_rad: wrap_pi(s.angle_rad - goal.angle_rad),
                     };
@@ -206,6 +214,9 @@ impl Runner<'_> {
         let ratio = self.ratio();
         if let Some(r) = ratio.filter(|r| r.is_finite()) {
             self.out.peak_friction_ratio = self.out.peak_friction_ratio.max(r);
+        }
+        if !self.opt.record {
+            return;
         }
         if self.t >= self.next_friction {
             if let Some(r) = ratio {
