@@ -10,13 +10,16 @@
 //! | [`geometry`] | plane vectors, the convex polygon, the arm's surfaces |
 //! | [`contact`] | grasp and roll forces, phase conditions, flight, the arm's torque (derived) |
 
+pub mod closed_loop;
 pub mod contact;
+pub mod examples;
 pub mod geometry;
 pub mod motion;
 pub mod ode;
 pub mod params;
 pub mod planner;
 pub mod simulate;
+pub mod summary;
 pub mod task;
 
 use contact::{ArmInertia, Placement, Rig};

@@ -393,8 +393,10 @@ impl<'a> Problem<'a> {
             sink.push(Kind::Release, (1.0 - sep) / g);
         }
         let stop = m.joint(m.settled_s()).angle_rad;
+        // a hundredth of a radian inside the limits: the controller checks the same stop
+        // in f32
         let (lo, hi) = self.layout.angle_bounds;
-        sink.within(Kind::BrakeStop, stop, lo, hi, hi - lo);
+        sink.within(Kind::BrakeStop, stop, lo + 0.01, hi - 0.01, hi - lo);
         if let Some(goal) = sys.task.goal {
             let f = s0.flown(dur, g);
             let tol = 0.1 * goal.tolerance_m;

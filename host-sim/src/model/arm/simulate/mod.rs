@@ -241,11 +241,8 @@ impl<'a> Runner<'a> {
     /// The next step's end: `STEP_S` on, or the next break if that comes first.
     fn step_end(&self) -> f64 {
         let t1 = self.t + self.opt.step_s;
-        self.breaks
-            .iter()
-            .copied()
-            .find(|&b| b > self.t + 1e-12)
-            .map_or(t1, |b| b.min(t1))
+        let i = self.breaks.partition_point(|&b| b <= self.t + 1e-12);
+        self.breaks.get(i).map_or(t1, |&b| b.min(t1))
     }
 
     fn go(&mut self) {

@@ -6,6 +6,10 @@ use crate::model::arm::contact::{BodyState, Pivot, Placement};
 use crate::model::arm::geometry::wrap_pi;
 use crate::model::arm::task::Phase;
 
+/// How far below the table top the arm may carry the object before the table takes it
+/// back, m (a tracked arm sags by microns at the start).
+const TABLE_TOLERANCE_M: f64 = 1e-3;
+
 /// Events after which a run is called chattering (a roll starting and falling back
 /// without end).
 const MAX_EVENTS: usize = 1000;
@@ -169,7 +173,7 @@ impl Runner<'_> {
             .iter()
             .map(|&v| s.point(v).y)
             .fold(f64::INFINITY, f64::min);
-        if low < self.table_y - 1e-6 {
+        if low < self.table_y - TABLE_TOLERANCE_M {
             self.event(self.t, "table");
             self.fail(
                 Executed::LostContact,
@@ -212,13 +216,16 @@ impl Runner<'_> {
 
     pub(super) fn record(&mut self) {
         let ratio = self.ratio();
+        let mut new_peak = false;
         if let Some(r) = ratio.filter(|r| r.is_finite()) {
+            new_peak = r > self.out.peak_friction_ratio;
             self.out.peak_friction_ratio = self.out.peak_friction_ratio.max(r);
         }
         if !self.opt.record {
             return;
         }
-        if self.t >= self.next_friction {
+        // every FRICTION_S, and every new peak so that a plot shows the true maximum
+        if self.t >= self.next_friction || new_peak {
             if let Some(r) = ratio {
                 let phase = self.phase();
                 self.out.friction.push(FrictionSample {
@@ -227,7 +234,9 @@ impl Runner<'_> {
                     phase,
                 });
             }
-            self.next_friction += FRICTION_S;
+            if self.t >= self.next_friction {
+                self.next_friction += FRICTION_S;
+            }
         }
         if self.t >= self.next_frame {
             let b = self.body();
