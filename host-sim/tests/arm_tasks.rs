@@ -28,6 +28,13 @@ fn check_task(name: &str, text: &str) -> ArmSummary {
     );
     assert!((s.mu_margin_check.mu - 0.95 * s.mu_required).abs() < 1e-12);
     assert!(s.mu_required > 0.0 && s.mu_required.is_finite());
+    // the program's samples see the friction peak: the dense verifier adds little
+    assert!(
+        s.mu_required <= 1.02 * s.mu_sampled,
+        "{name}: dense peak {} vs sampled {}",
+        s.mu_required,
+        s.mu_sampled
+    );
     // the verifier's own peak friction is what the plan claims to need, within 1 %
     let peak = s
         .friction

@@ -62,6 +62,9 @@ pub struct ArmSummary {
     pub phases: String,
     /// The friction coefficient the plan needs.
     pub mu_required: f64,
+    /// The planner's mu variable (what its samples need, with the 1 % margin);
+    /// `mu_required` is this or the verifier's dense peak, whichever is higher.
+    pub mu_sampled: f64,
     /// The solver used.
     pub planner_solver: Solver,
     /// Solver iterations (summed over starts).
@@ -148,6 +151,7 @@ fn summarize(
         task: sys.task.kind.name(),
         phases: sys.task.kind.letters(),
         mu_required: p.mu,
+        mu_sampled: p.mu_sampled,
         planner_solver: sys.planner.solver,
         planner_iterations: p.iterations,
         planner_evaluations: p.evaluations,

@@ -114,6 +114,10 @@ pub struct Problem<'a> {
     pub sys: &'a ArmSystem,
     /// Its design-vector layout.
     pub layout: Layout,
+    /// Extra grasp samples per phase, as fractions of the phase's duration in (0, 1):
+    /// where the verifier found friction peaks between the regular samples
+    /// ([`super::refine`]).
+    pub extra: Vec<Vec<f64>>,
 }
 
 /// Torque samples of one phase: (t, tau).
@@ -122,9 +126,11 @@ type Torques = Vec<(f64, f64)>;
 impl<'a> Problem<'a> {
     /// The program of a system's task.
     pub fn new(sys: &'a ArmSystem) -> Self {
+        let layout = Layout::new(sys);
         Self {
+            extra: vec![Vec::new(); layout.phases.len()],
             sys,
-            layout: Layout::new(sys),
+            layout,
         }
     }
 
@@ -156,7 +162,8 @@ impl<'a> Problem<'a> {
             let next = phases.get(i + 1).copied();
             match phase {
                 Phase::Grasp => {
-                    let tq = self.grasp_phase(&m, &place, t0, dur, next, d.mu, &mut sink);
+                    let u = self.fractions(i, next);
+                    let tq = self.grasp_phase(&m, &place, t0, dur, &u, d.mu, &mut sink);
                     self.torque_rates(&tq, &mut sink);
                     let j = m.joint(t0 + dur);
                     leaving = Some((
@@ -245,8 +252,24 @@ impl<'a> Problem<'a> {
         sink.push(kinds.1, (self.sys.planner.normal_force_min_mps2 - f_n) / g);
     }
 
-    /// Dynamic-grasp constraints at the phase's samples (its start included; its end
-    /// excluded when a roll follows, the roll's own start being that instant).
+    /// Sample fractions of grasp phase `i`: `samples_per_phase` even steps, its start
+    /// included, its end excluded when a roll follows (the roll's own start is that
+    /// instant), and the refinement's extra fractions.
+    fn fractions(&self, i: usize, next: Option<Phase>) -> Vec<f64> {
+        let k = self.sys.planner.samples_per_phase;
+        let last = if next == Some(Phase::Roll) { k - 1 } else { k };
+        let mut u: Vec<f64> = (0..=last).map(|j| j as f64 / k as f64).collect();
+        let top = if next == Some(Phase::Roll) {
+            1.0
+        } else {
+            1.0 + 1e-12
+        };
+        u.extend(self.extra[i].iter().filter(|&&f| f > 0.0 && f < top));
+        u.sort_by(f64::total_cmp);
+        u
+    }
+
+    /// Dynamic-grasp constraints at the sample fractions `u` of the phase.
     #[allow(clippy::too_many_arguments)]
     fn grasp_phase(
         &self,
@@ -254,16 +277,14 @@ impl<'a> Problem<'a> {
         place: &Placement,
         t0: f64,
         dur: f64,
-        next: Option<Phase>,
+        u: &[f64],
         mu: f64,
         sink: &mut Sink,
     ) -> Torques {
-        let k = self.sys.planner.samples_per_phase;
-        let last = if next == Some(Phase::Roll) { k - 1 } else { k };
         let rig = &self.sys.rig;
-        let mut tq = Vec::with_capacity(k + 1);
-        for i in 0..=last {
-            let t = t0 + dur * i as f64 / k as f64;
+        let mut tq = Vec::with_capacity(u.len());
+        for &f in u {
+            let t = t0 + dur * f;
             let j = m.joint(t);
             let g = rig.grasp(place, &j);
             self.cone(

@@ -6,6 +6,7 @@
 
 pub mod evaluate;
 pub mod layout;
+pub mod refine;
 pub mod seed;
 pub mod solve;
 
@@ -111,29 +112,52 @@ fn worst(e: &evaluate::Eval) -> (f64, Option<Kind>) {
         })
 }
 
+/// One start: solve, then refine the samples and solve again (at most
+/// [`refine::ROUNDS`] times). Returns the problem with its extra samples and the result.
+fn solve_start<'a>(sys: &'a ArmSystem, x0: Vec<f64>) -> (Problem<'a>, solve::Solved) {
+    let mut problem = Problem::new(sys);
+    let bounds = problem.layout.bounds();
+    let (mut x, mut it, mut ev) = (x0, 0, 0);
+    let mut status = String::new();
+    for round in 0..=refine::ROUNDS {
+        let s = match sys.planner.solver {
+            Solver::Slsqp => solve::slsqp(&problem, &x, &bounds, sys.planner.max_evaluations),
+            Solver::Alm => solve::alm(&problem, &x, &bounds, sys.planner.max_evaluations),
+        };
+        (x, status) = (s.x, s.status);
+        it += s.iterations;
+        ev += s.evaluations;
+        repair_mu(&problem, &mut x);
+        if round == refine::ROUNDS || refine::add_peaks(&mut problem, &x) == 0 {
+            break;
+        }
+    }
+    let solved = solve::Solved {
+        x,
+        iterations: it,
+        evaluations: ev,
+        status,
+    };
+    (problem, solved)
+}
+
 /// Plan the system's task. `Err(NoPlan)` names the constraint that no start satisfied.
 pub fn plan(sys: &ArmSystem) -> Result<Plan, ArmError> {
     let clock = Instant::now();
-    let problem = Problem::new(sys);
-    let bounds = problem.layout.bounds();
-    let (mut iterations, mut evaluations) = (0, 0);
-    let mut best: Option<(usize, solve::Solved, f64)> = None;
-    let mut least_bad: (f64, Option<Kind>, String) = (f64::INFINITY, None, String::new());
+    let seeding = Problem::new(sys);
     // shot seeds first, then the plain guesses: SQP's local optima differ by start
-    let mut starts = seed::seeds(&problem, sys.planner.starts);
+    let mut starts = seed::seeds(&seeding, sys.planner.starts);
     let shot = starts.len();
     for k in 0..sys.planner.starts.saturating_sub(shot).max(2) {
-        starts.push(problem.layout.guess(sys.task.kind, k));
+        starts.push(seeding.layout.guess(sys.task.kind, k));
     }
+    let (mut iterations, mut evaluations) = (0, 0);
+    let mut best: Option<(usize, Problem, solve::Solved, f64)> = None;
+    let mut least_bad: (f64, Option<Kind>, String) = (f64::INFINITY, None, String::new());
     for (k, x0) in starts.into_iter().enumerate() {
-        let s = match sys.planner.solver {
-            Solver::Slsqp => solve::slsqp(&problem, &x0, &bounds, sys.planner.max_evaluations),
-            Solver::Alm => solve::alm(&problem, &x0, &bounds, sys.planner.max_evaluations),
-        };
+        let (problem, s) = solve_start(sys, x0);
         iterations += s.iterations;
         evaluations += s.evaluations;
-        let mut s = s;
-        repair_mu(&problem, &mut s.x);
         let e = problem.evaluate(&s.x, false);
         let (w, kind) = worst(&e);
         if w > FEASIBILITY_TOL {
@@ -142,11 +166,11 @@ pub fn plan(sys: &ArmSystem) -> Result<Plan, ArmError> {
             }
             continue;
         }
-        if best.as_ref().is_none_or(|b| e.objective < b.2) {
-            best = Some((k, s, e.objective));
+        if best.as_ref().is_none_or(|b| e.objective < b.3) {
+            best = Some((k, problem, s, e.objective));
         }
     }
-    let Some((start, s, _)) = best else {
+    let Some((start, problem, s, _)) = best else {
         return Err(ArmError::NoPlan(format!(
             "no start met every constraint; the closest violated {:?} by {:.3e} (scaled; solver status {})",
             least_bad.1, least_bad.0, least_bad.2

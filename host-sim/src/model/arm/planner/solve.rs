@@ -131,7 +131,97 @@ pub fn slsqp(problem: &Problem, x0: &[f64], bounds: &[(f64, f64)], max_evals: us
     }
 }
 
-/// Minimize with the augmented Lagrangian method (PANOC inner solves).
+/// Minimize with the augmented Lagrangian method of `optimization_engine` (OpEn):
+/// `F1(x) = c(x)` must lie in `C = (-inf, 0]^m`, `x` in the bound rectangle; PANOC
+/// solves the inner problems with the same central-difference gradients. At most
+/// `max_evals` inner iterations per outer iteration, 50 outer iterations.
 pub fn alm(problem: &Problem, x0: &[f64], bounds: &[(f64, f64)], max_evals: usize) -> Solved {
-    slsqp(problem, x0, bounds, max_evals)
+    use optimization_engine::alm::{
+        AlmCache, AlmFactory, AlmOptimizer, AlmProblem, NO_JACOBIAN_MAPPING, NO_MAPPING,
+    };
+    use optimization_engine::constraints::Rectangle;
+    use optimization_engine::panoc::PANOCCache;
+    use optimization_engine::FunctionCallResult;
+    let n = x0.len();
+    let m = problem.evaluate(x0, false).constraints.len();
+    let cache = RefCell::new(Cache::new(problem));
+    let f = |u: &[f64], cost: &mut f64| -> FunctionCallResult {
+        let mut c = cache.borrow_mut();
+        c.at(u, false);
+        *cost = c.f;
+        Ok(())
+    };
+    let df = |u: &[f64], grad: &mut [f64]| -> FunctionCallResult {
+        let mut c = cache.borrow_mut();
+        c.at(u, true);
+        if let Some((gf, _)) = &c.grad {
+            grad.copy_from_slice(gf);
+        }
+        Ok(())
+    };
+    let f1 = |u: &[f64], out: &mut [f64]| -> FunctionCallResult {
+        let mut c = cache.borrow_mut();
+        c.at(u, false);
+        out.copy_from_slice(&c.c);
+        Ok(())
+    };
+    let jf1t = |u: &[f64], d: &[f64], res: &mut [f64]| -> FunctionCallResult {
+        let mut c = cache.borrow_mut();
+        c.at(u, true);
+        res.iter_mut().for_each(|r| *r = 0.0);
+        if let Some((_, jc)) = &c.grad {
+            for (row, di) in jc.iter().zip(d) {
+                for (r, j) in res.iter_mut().zip(row) {
+                    *r += j * di;
+                }
+            }
+        }
+        Ok(())
+    };
+    let zeros = vec![0.0; m];
+    let y_max = vec![1e8; m];
+    let lo: Vec<f64> = bounds.iter().map(|b| b.0).collect();
+    let hi: Vec<f64> = bounds.iter().map(|b| b.1).collect();
+    let set_c = Rectangle::new(None, Some(&zeros));
+    let factory = AlmFactory::new(
+        f,
+        df,
+        Some(f1),
+        Some(jf1t),
+        NO_MAPPING,
+        NO_JACOBIAN_MAPPING,
+        Some(set_c),
+        0,
+    );
+    let alm_problem = AlmProblem::new(
+        Rectangle::new(Some(&lo), Some(&hi)),
+        Some(Rectangle::new(None, Some(&zeros))),
+        Some(Rectangle::new(Some(&zeros), Some(&y_max))),
+        |u: &[f64], xi: &[f64], cost: &mut f64| factory.psi(u, xi, cost),
+        |u: &[f64], xi: &[f64], grad: &mut [f64]| factory.d_psi(u, xi, grad),
+        Some(f1),
+        NO_MAPPING,
+        m,
+        0,
+    );
+    let mut alm_cache = AlmCache::new(PANOCCache::new(n, 1e-5, 10), m, 0);
+    let mut opt = AlmOptimizer::new(&mut alm_cache, alm_problem)
+        .with_delta_tolerance(1e-6)
+        .with_epsilon_tolerance(1e-5)
+        .with_max_outer_iterations(50)
+        .with_max_inner_iterations(max_evals)
+        .with_initial_penalty(10.0)
+        .with_penalty_update_factor(5.0);
+    let mut x = x0.to_vec();
+    let (status, iterations) = match opt.solve(&mut x) {
+        Ok(r) => (format!("{:?}", r.exit_status()), r.num_inner_iterations()),
+        Err(e) => (format!("{e:?}"), 0),
+    };
+    let c = cache.borrow();
+    Solved {
+        x,
+        iterations,
+        evaluations: c.evals,
+        status,
+    }
 }
