@@ -435,6 +435,9 @@ impl FixedRate for ArmController {
     type Params = ArmParams;
     type Frame = ArmFrame;
     type Command = ArmCommand;
+    /// Provisional: the static argument and the QEMU measurement come with the arm's HIL
+    /// integration, which must confirm or replace this figure.
+    const STEP_INSTRUCTION_BUDGET: u32 = 600;
 
     fn new(params: ArmParams) -> Result<Self, ParamError> {
         ArmController::new(params)
