@@ -111,6 +111,11 @@ pub struct Estimate {
 pub struct BallEstimator {
     params: EstimatorParams,
     dt_s: f32,
+    /// 1/dt, 1/s, computed once: the step multiplies instead of dividing (a `vdiv.f32` is
+    /// 14 cycles on a Cortex-M4, a `vmul.f32` 1); within 1 ulp of dividing by dt.
+    inv_dt_per_s: f32,
+    /// The velocity gain c/dt, 1/s, computed once (bit-identical to dividing every step).
+    gain_velocity_per_s: f32,
     gravity_mps2: f32,
     phase: Phase,
     /// State at the time of the last measurement.
@@ -128,6 +133,8 @@ impl BallEstimator {
         Ok(Self {
             params,
             dt_s,
+            inv_dt_per_s: 1.0 / dt_s,
+            gain_velocity_per_s: params.gain_velocity / dt_s,
             gravity_mps2,
             phase: Phase::Empty,
             ball: BallState::default(),
@@ -160,7 +167,7 @@ impl BallEstimator {
                 let innovation = z_m - pred.height_m;
                 if innovation.abs() <= self.params.gate_m {
                     pred.height_m += self.params.gain_position * innovation;
-                    pred.velocity_mps += (self.params.gain_velocity / dt) * innovation;
+                    pred.velocity_mps += self.gain_velocity_per_s * innovation;
                     self.ball = pred;
                     self.outliers = 0;
                     self.phase = Phase::Tracking {
@@ -194,7 +201,7 @@ impl BallEstimator {
     fn initialise(&mut self, z0: f32, z1: f32) {
         let dt = self.dt_s;
         // b(t) = z0 + v0 t - g t^2/2 through both samples; velocity at the second one
-        self.ball = BallState::new(z1, (z1 - z0) / dt - 0.5 * self.gravity_mps2 * dt);
+        self.ball = BallState::new(z1, (z1 - z0) * self.inv_dt_per_s - 0.5 * self.gravity_mps2 * dt);
         self.outliers = 0;
         self.phase = Phase::Tracking { accepted: 0 };
     }

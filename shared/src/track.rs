@@ -64,6 +64,9 @@ pub struct Tracker {
     kd_per_s: f32,
     limits: PaddleLimits,
     dt_s: f32,
+    /// 1/dt, 1/s, computed once: the step multiplies instead of dividing (a `vdiv.f32` is
+    /// 14 cycles on a Cortex-M4, a `vmul.f32` 1); within 1 ulp of dividing by dt.
+    inv_dt_per_s: f32,
 }
 
 impl Tracker {
@@ -84,6 +87,7 @@ impl Tracker {
             kd_per_s,
             limits,
             dt_s,
+            inv_dt_per_s: 1.0 / dt_s,
         })
     }
 
@@ -126,7 +130,7 @@ impl Tracker {
     /// period if it can, else the largest braking acceleration.
     pub fn brake(&self, paddle: &PaddleState<f32>) -> f32 {
         let a = self.limits.accel_max_mps2;
-        (-paddle.velocity_mps / self.dt_s).clamp_r(-a, a)
+        (-paddle.velocity_mps * self.inv_dt_per_s).clamp_r(-a, a)
     }
 
     fn limit(&self, u: f32, paddle: &PaddleState<f32>) -> f32 {
@@ -138,7 +142,7 @@ impl Tracker {
         let v_up = l.velocity_max_mps.min_r((2.0 * a * up_room).sqrt());
         let v_down = l.velocity_max_mps.min_r((2.0 * a * down_room).sqrt());
         let v_next = (paddle.velocity_mps + u * self.dt_s).clamp_r(-v_down, v_up);
-        ((v_next - paddle.velocity_mps) / self.dt_s).clamp_r(-a, a)
+        ((v_next - paddle.velocity_mps) * self.inv_dt_per_s).clamp_r(-a, a)
     }
 }
 
