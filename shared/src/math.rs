@@ -198,32 +198,38 @@ impl Real for f32 {
 /// Name of the `f32` backend compiled in: `"libm"` or `"micromath"`.
 pub const BACKEND: &str = backend::NAME;
 
-/// Correctly rounded f32 square root: the FPU's `vsqrt.f32` on hard-float ARM.
-///
-/// The value passes through a core register and the scratch register `s15` (declared
-/// clobbered; it is caller-saved under the eabihf calling convention), because naming an FPU
-/// register class for an operand in `asm!` needs an unstable target feature on ARM. Cost:
-/// `vsqrt.f32` (14 cycles on a Cortex-M4) plus four `vmov`s.
+/// The hard-float ARM square root (a module of its own so tools can name it: its body is
+/// compiled only for the target).
 #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-#[inline]
-#[allow(unsafe_code)]
-pub(crate) fn sqrt_f32(x: f32) -> f32 {
-    let bits: u32;
-    // SAFETY: the block moves `x` into s15, runs `vsqrt.f32`, moves the result out; s15 is
-    // declared clobbered; it touches no memory and no stack, and every eabihf target has a
-    // VFP unit with this instruction.
-    unsafe {
-        core::arch::asm!(
-            "vmov s15, {x}",
-            "vsqrt.f32 s15, s15",
-            "vmov {x}, s15",
-            x = inout(reg) x.to_bits() => bits,
-            out("s15") _,
-            options(pure, nomem, nostack),
-        );
+mod fpu {
+    /// Correctly rounded f32 square root: the FPU's `vsqrt.f32` on hard-float ARM.
+    ///
+    /// The value passes through a core register and the scratch register `s15` (declared
+    /// clobbered; it is caller-saved under the eabihf calling convention), because naming an FPU
+    /// register class for an operand in `asm!` needs an unstable target feature on ARM. Cost:
+    /// `vsqrt.f32` (14 cycles on a Cortex-M4) plus four `vmov`s.
+    #[inline]
+    #[allow(unsafe_code)]
+    pub(crate) fn sqrt_f32(x: f32) -> f32 {
+        let bits: u32;
+        // SAFETY: the block moves `x` into s15, runs `vsqrt.f32`, moves the result out; s15 is
+        // declared clobbered; it touches no memory and no stack, and every eabihf target has a
+        // VFP unit with this instruction.
+        unsafe {
+            core::arch::asm!(
+                "vmov s15, {x}",
+                "vsqrt.f32 s15, s15",
+                "vmov {x}, s15",
+                x = inout(reg) x.to_bits() => bits,
+                out("s15") _,
+                options(pure, nomem, nostack),
+            );
+        }
+        f32::from_bits(bits)
     }
-    f32::from_bits(bits)
 }
+#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+pub(crate) use fpu::sqrt_f32;
 
 /// Correctly rounded f32 square root: `libm::sqrtf` where there is no FPU instruction to use.
 #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
@@ -259,7 +265,10 @@ mod backend {
 }
 
 #[cfg(feature = "fast-math")]
-mod backend {
+use micromath_backend as backend;
+
+#[cfg(feature = "fast-math")]
+mod micromath_backend {
     use micromath::F32Ext;
     pub(super) const NAME: &str = "micromath";
     pub(super) use super::sqrt_f32 as sqrt;
