@@ -123,6 +123,29 @@ pub struct Controller {
     stale_steps: u16,
     /// Last valid paddle measurement, dead-reckoned with our own commands while faulted.
     paddle: PaddleState<f32>,
+    /// Plausible paddle measurements, computed once from the limits (see [`Self::check`]).
+    plausible: PlausiblePaddle,
+}
+
+/// The plausible range of a paddle measurement: the travel range widened by 5 % of its
+/// length on each side, and speeds up to twice the limit. Computed once (it depends only on
+/// the parameters), so the step does not recompute it.
+#[derive(Clone, Copy, Debug)]
+struct PlausiblePaddle {
+    min_height_m: f32,
+    max_height_m: f32,
+    max_speed_mps: f32,
+}
+
+impl PlausiblePaddle {
+    fn new(l: &PaddleLimits) -> Self {
+        let travel_margin_m = 0.05 * (l.max_height_m - l.min_height_m);
+        Self {
+            min_height_m: l.min_height_m - travel_margin_m,
+            max_height_m: l.max_height_m + travel_margin_m,
+            max_speed_mps: 2.0 * l.velocity_max_mps,
+        }
+    }
 }
 
 impl Controller {
@@ -151,6 +174,7 @@ impl Controller {
             last_seq: None,
             stale_steps: 0,
             paddle: PaddleState::new(params.home_height_m, 0.0),
+            plausible: PlausiblePaddle::new(&params.limits),
         })
     }
 
@@ -249,13 +273,12 @@ impl Controller {
             return Err(Fault::NonFinite);
         }
         let p = &self.params;
-        let l = &p.limits;
-        let travel_margin_m = 0.05 * (l.max_height_m - l.min_height_m);
+        let q = &self.plausible;
         let ball_range = p.ball_height_min_m..=p.ball_height_max_m;
-        let paddle_range = (l.min_height_m - travel_margin_m)..=(l.max_height_m + travel_margin_m);
+        let paddle_range = q.min_height_m..=q.max_height_m;
         if !ball_range.contains(&frame.ball_height_m)
             || !paddle_range.contains(&frame.paddle_height_m)
-            || frame.paddle_velocity_mps.abs() > 2.0 * l.velocity_max_mps
+            || frame.paddle_velocity_mps.abs() > q.max_speed_mps
         {
             return Err(Fault::OutOfRange);
         }

@@ -201,7 +201,10 @@ impl BallEstimator {
     fn initialise(&mut self, z0: f32, z1: f32) {
         let dt = self.dt_s;
         // b(t) = z0 + v0 t - g t^2/2 through both samples; velocity at the second one
-        self.ball = BallState::new(z1, (z1 - z0) * self.inv_dt_per_s - 0.5 * self.gravity_mps2 * dt);
+        self.ball = BallState::new(
+            z1,
+            (z1 - z0) * self.inv_dt_per_s - 0.5 * self.gravity_mps2 * dt,
+        );
         self.outliers = 0;
         self.phase = Phase::Tracking { accepted: 0 };
     }
