@@ -682,6 +682,50 @@ mod tests {
         assert!(!out.impact);
     }
 
+    /// Coasting during tracking flies the state one period by the exact ballistic model and
+    /// keeps the estimate valid; the reported state is that prediction.
+    #[test]
+    fn coasting_predicts_by_the_ballistic_model() {
+        let dt = 0.002f32;
+        let mut est = BallEstimator::new(EstimatorParams::default(), dt, G).unwrap();
+        let paddle = PaddleState::new(-1.0, 0.0);
+        for k in 0..30 {
+            est.update(
+                BallState::new(2.0f32, 1.0).flown(k as f32 * dt, G).height_m,
+                &paddle,
+            );
+        }
+        let before = est.state_at_measurement();
+        let out = est.coast(&paddle);
+        let (b, v, dt64, g) = (
+            before.height_m as f64,
+            before.velocity_mps as f64,
+            dt as f64,
+            G as f64,
+        );
+        assert!(out.valid && !out.impact);
+        assert!((out.ball.height_m as f64 - (b + v * dt64 - 0.5 * g * dt64 * dt64)).abs() < 1e-6);
+        assert!((out.ball.velocity_mps as f64 - (v - g * dt64)).abs() < 1e-6);
+        assert_eq!(est.state_at_measurement(), out.ball);
+    }
+
+    /// The impact flag: set on the step whose filter prediction crosses the paddle (here
+    /// without latency, so the output adds no impact of its own), and on no other.
+    #[test]
+    fn impact_flag_marks_the_filter_impact_step() {
+        let dt = 0.002f64;
+        let g = G as f64;
+        let mut est = BallEstimator::new(EstimatorParams::default(), dt as f32, G).unwrap();
+        let t_hit = 99.5 * dt;
+        let truth = FallOntoMovingPaddle::new(0.5 * g * t_hit * t_hit, 0.0, 0.0, 0.8);
+        let p = PaddleState::new(0.0, 0.0);
+        let flags: Vec<bool> = (0..=110)
+            .map(|j| est.update(truth.ball(j as f64 * dt).0 as f32, &p).impact)
+            .collect();
+        let at: Vec<usize> = (0..flags.len()).filter(|&j| flags[j]).collect();
+        assert_eq!(at, [100]);
+    }
+
     #[test]
     fn reset_forgets_the_state() {
         let dt = 0.002f32;

@@ -254,6 +254,19 @@ mod tests {
     }
 
     #[test]
+    fn accessors_return_the_parameters_and_eta_star_is_g_h() {
+        let l = MirrorLaw::new(0.2, 0.03, 1.5, 9.0).unwrap();
+        assert_eq!(l.kappa0(), 0.2);
+        assert_eq!(l.kappa1_s2pm2(), 0.03);
+        assert_eq!(l.gravity_mps2(), 9.0);
+        assert!((l.target_energy_jpkg() - 13.5).abs() < 1e-12);
+        assert!((l.target_apex_m() - 1.5).abs() < 1e-12);
+        // k(w) at the target energy is kappa0; 1 J/kg below it, kappa0 + kappa1
+        assert!((l.gain(&BallState::new(1.5, 0.0)) - 0.2).abs() < 1e-12);
+        assert!((l.gain(&BallState::new(0.0, (2.0f64 * 12.5).sqrt())) - 0.23).abs() < 1e-12);
+    }
+
+    #[test]
     fn constructor_names_bad_parameters() {
         assert_eq!(
             MirrorLaw::new(1.0, 0.1, 1.0, G).unwrap_err(),
