@@ -190,6 +190,109 @@ mod tests {
         assert!(u.is_finite() && u.abs() <= 200.0);
     }
 
+    /// Near a travel end the speed towards it is limited to the speed from which a_max can
+    /// still stop the paddle: sqrt(2 a_max room). By hand, a_max = 200 m/s^2, room 0.01 m:
+    /// 2 m/s; from 2.2 m/s towards the end the command is (2 - 2.2)/dt = -100 m/s^2.
+    #[test]
+    fn stopping_speed_limit_near_each_travel_end_by_hand() {
+        let t = tracker();
+        let far_up = PaddleReference {
+            height_m: 0.1,
+            velocity_mps: 3.0,
+            accel_mps2: 0.0,
+        };
+        let u = t.command(&far_up, &PaddleState::new(0.09, 2.2));
+        assert!((u + 100.0).abs() < 0.1, "{u}");
+        let far_down = PaddleReference {
+            height_m: -0.3,
+            velocity_mps: -3.0,
+            accel_mps2: 0.0,
+        };
+        let u = t.command(&far_down, &PaddleState::new(-0.29, -2.2));
+        assert!((u - 100.0).abs() < 0.1, "{u}");
+        // beyond the end (no room): the speed limit is 0, the paddle is braked to rest
+        let u = t.command(&far_up, &PaddleState::new(0.12, 0.1));
+        assert!((u + 50.0).abs() < 1e-3, "{u}");
+    }
+
+    /// References are clamped into the travel range: beyond it the position is clamped and
+    /// velocity and acceleration zeroed; exactly at an end or inside it nothing is changed
+    /// except the velocity clamp to +-velocity_max.
+    #[test]
+    fn reference_clamp_by_hand() {
+        let t = tracker();
+        let r = |h: f32, v: f32| PaddleReference {
+            height_m: h,
+            velocity_mps: v,
+            accel_mps2: 1.5,
+        };
+        let zero = |h: f32| PaddleReference {
+            height_m: h,
+            velocity_mps: 0.0,
+            accel_mps2: 0.0,
+        };
+        assert_eq!(t.clamp_reference(r(0.2, 1.0)), zero(0.1));
+        assert_eq!(t.clamp_reference(r(-0.5, 1.0)), zero(-0.3));
+        assert_eq!(t.clamp_reference(r(0.1, 1.0)), r(0.1, 1.0));
+        assert_eq!(t.clamp_reference(r(-0.3, 1.0)), r(-0.3, 1.0));
+        assert_eq!(t.clamp_reference(r(0.0, 5.0)), r(0.0, 3.0));
+        assert_eq!(t.clamp_reference(r(0.0, -5.0)), r(0.0, -3.0));
+    }
+
+    #[test]
+    fn bad_limits_are_named() {
+        let bad = |l: PaddleLimits| Tracker::new(1.0, 1.0, l, 0.002).unwrap_err();
+        let d = PaddleLimits::default();
+        assert_eq!(
+            bad(PaddleLimits {
+                min_height_m: f32::NAN,
+                ..d
+            }),
+            ParamError::NotFinite("limits.min_height_m")
+        );
+        assert_eq!(
+            bad(PaddleLimits {
+                max_height_m: f32::INFINITY,
+                ..d
+            }),
+            ParamError::NotFinite("limits.max_height_m")
+        );
+        assert_eq!(
+            bad(PaddleLimits {
+                max_height_m: -0.3,
+                ..d
+            }),
+            ParamError::OutOfRange("limits.max_height_m")
+        );
+        assert_eq!(
+            bad(PaddleLimits {
+                velocity_max_mps: 0.0,
+                ..d
+            }),
+            ParamError::NotPositive("limits.velocity_max_mps")
+        );
+        assert_eq!(
+            bad(PaddleLimits {
+                accel_max_mps2: -1.0,
+                ..d
+            }),
+            ParamError::NotPositive("limits.accel_max_mps2")
+        );
+        assert_eq!(
+            Tracker::new(-1.0, 1.0, d, 0.002).unwrap_err(),
+            ParamError::Negative("tracking.kp_per_s2")
+        );
+        assert_eq!(
+            Tracker::new(1.0, -1.0, d, 0.002).unwrap_err(),
+            ParamError::Negative("tracking.kd_per_s")
+        );
+        assert_eq!(
+            Tracker::new(1.0, 1.0, d, 0.0).unwrap_err(),
+            ParamError::NotPositive("dt_s")
+        );
+        assert_eq!(tracker().limits(), &d);
+    }
+
     #[test]
     fn brake_stops_in_one_step_when_it_can() {
         let t = tracker();
