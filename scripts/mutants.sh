@@ -19,6 +19,8 @@
 # - only dexter-core's own tests run for a mutant of dexter-core (cargo-mutants' default):
 #   the unit tests, shared/tests/*.rs (closed loop, properties) and the doc tests. The
 #   simulator's and HIL tests would also catch some, but they take minutes per mutant.
+# - `-- --lib --tests`: the unit and integration tests, not the doc tests (dexter-core has
+#   none; building rustdoc for every mutant would cost seconds each for nothing).
 # - --timeout 60: a mutant that makes a loop endless (a step cap turned off) is stopped and
 #   counted as "timeout" (caught), not left running.
 # - exclusions (--exclude-re), each for a reason:
@@ -49,13 +51,14 @@ done
 excludes=(--exclude-re 'fpu::|micromath_backend::')
 status=0
 cargo mutants --package dexter-core --jobs "$jobs" --timeout 60 --output "$out" \
-    "${file_args[@]}" "${excludes[@]}" || status=$?
+    "${file_args[@]}" "${excludes[@]}" -- --lib --tests || status=$?
 echo "== survivors (missed) =="
 cat "$out/mutants.out/missed.txt" 2>/dev/null || true
 # second pass: the fast-math backend, with its feature on
 if printf '%s\n' "${files[@]}" | grep -q 'math\.rs$'; then
     cargo mutants --package dexter-core --features fast-math --jobs "$jobs" --timeout 60 \
-        --output "$out/fast-math" --file shared/src/math.rs --re 'micromath_backend::' || status=$?
+        --output "$out/fast-math" --file shared/src/math.rs --re 'micromath_backend::' \
+        -- --lib --tests || status=$?
     echo "== survivors (missed), fast-math backend =="
     cat "$out/fast-math/mutants.out/missed.txt" 2>/dev/null || true
 fi
