@@ -191,8 +191,8 @@ mod tests {
     }
 
     /// Near a travel end the speed towards it is limited to the speed from which a_max can
-    /// still stop the paddle: sqrt(2 a_max room). By hand, a_max = 200 m/s^2, room 0.01 m:
-    /// 2 m/s; from 2.2 m/s towards the end the command is (2 - 2.2)/dt = -100 m/s^2.
+    /// still stop the paddle: sqrt(2 a_max room). By hand, a_max = 200 m/s^2, room 2.5 mm:
+    /// 1 m/s; from 1.2 m/s towards the end the command is (1 - 1.2)/dt = -100 m/s^2.
     #[test]
     fn stopping_speed_limit_near_each_travel_end_by_hand() {
         let t = tracker();
@@ -201,14 +201,14 @@ mod tests {
             velocity_mps: 3.0,
             accel_mps2: 0.0,
         };
-        let u = t.command(&far_up, &PaddleState::new(0.09, 2.2));
+        let u = t.command(&far_up, &PaddleState::new(0.0975, 1.2));
         assert!((u + 100.0).abs() < 0.1, "{u}");
         let far_down = PaddleReference {
             height_m: -0.3,
             velocity_mps: -3.0,
             accel_mps2: 0.0,
         };
-        let u = t.command(&far_down, &PaddleState::new(-0.29, -2.2));
+        let u = t.command(&far_down, &PaddleState::new(-0.2975, -1.2));
         assert!((u - 100.0).abs() < 0.1, "{u}");
         // beyond the end (no room): the speed limit is 0, the paddle is braked to rest
         let u = t.command(&far_up, &PaddleState::new(0.12, 0.1));
