@@ -3,7 +3,9 @@
 //! code under test).
 
 use dexter_core::hop::{energy_fixed_point, EnergyServoThrust};
-use dexter_core::planar::{PlanarBall, PlanarMirrorLaw};
+use dexter_core::planar::{quadratic_roots, ModifiedPlanarLaw, PlanarBall, PlanarMirrorLaw};
+use dexter_core::tilt::{restitution_compensation, TiltLaw};
+use std::f64::consts::{FRAC_PI_3, FRAC_PI_4};
 
 /// Planar mirror gain, eq. 5/12: k(w) = kappa0 + kappa1 (eta* - eta) with
 /// eta = |b'|^2/2 + gamma b_z. By hand: gamma = 2, h* = 3 -> eta* = 6; the ball
@@ -35,4 +37,73 @@ fn energy_fixed_point_needs_alpha_above_one() {
     assert_eq!(energy_fixed_point(0.5f64), None);
     let e = energy_fixed_point(std::f64::consts::E).unwrap();
     assert!((e - 1.0).abs() < 1e-15);
+}
+
+/// The modified law's gain is eq. 5's, as for the planar law above (same numbers).
+#[test]
+fn modified_planar_gain_by_hand() {
+    let law = ModifiedPlanarLaw::new(0.1f64, 0.2, 3.0, 0.0, 0.0, 1.0, 2.0).unwrap();
+    let ball = PlanarBall::new(0.7, 1.0, 1.0, 2.0);
+    assert!((law.gain(&ball) - 0.4).abs() < 1e-12, "{}", law.gain(&ball));
+}
+
+/// theta_l = atan2(kappa10 (x - x*) + kappa11 x', x) at the apex (eq. 15): kappa10 = 0.3,
+/// kappa11 = 0.4 s, x* = 1.5, apex x = 2, x' = 0.5: atan2(0.15 + 0.2, 2).
+#[test]
+fn modified_planar_target_angle_by_hand() {
+    let law = ModifiedPlanarLaw::new(0.1f64, 0.2, 3.0, 0.3, 0.4, 1.5, 2.0).unwrap();
+    let apex = PlanarBall::new(2.0, 1.0, 0.5, 0.0);
+    assert!((law.target_angle_rad(&apex) - 0.35f64.atan2(2.0)).abs() < 1e-15);
+}
+
+/// Eq. 16: when the falling ball crosses the ray at theta_l. By hand, gamma = 2:
+/// - ray at 45 deg, apex (1, 3) moving at x' = 1: 3 - t^2 = 1 + t, t = 1;
+/// - ray at 0 deg, apex (1, 2) at rest: 2 - t^2 = 0, t = sqrt(2);
+/// - ray at 0 deg through the apex itself (1, 0): t = 0 (a root at 0 counts);
+/// - a state past its apex, (1, 1) rising at 1 m/s: 1 + t - t^2 = 0, t = (1 + sqrt 5)/2;
+/// - ray at -45 deg, (1, -0.5) with velocity (2, -1): 0.5 + t - t^2 = 0, roots
+///   (1 -+ sqrt 3)/2: the negative one is in the past, the answer is (1 + sqrt 3)/2;
+/// - ray at 60 deg, apex (-0.5, 1): the line z = sqrt(3) x is met at (-0.5, -0.87), on the
+///   opposite ray: no impact; apex (0, 1): the line is met at the origin, not on the open
+///   ray: no impact.
+#[test]
+fn modified_planar_impact_time_by_hand() {
+    let law = ModifiedPlanarLaw::new(0.1f64, 0.0, 1.0, 0.0, 0.0, 1.0, 2.0).unwrap();
+    let t = |x, z, xd, zd, theta| law.impact_time_s(&PlanarBall::new(x, z, xd, zd), theta);
+    let close = |got: Option<f64>, want: f64| {
+        assert!(
+            got.is_some_and(|g| (g - want).abs() < 1e-12),
+            "{got:?} vs {want}"
+        )
+    };
+    close(t(1.0, 3.0, 1.0, 0.0, FRAC_PI_4), 1.0);
+    close(t(1.0, 2.0, 0.0, 0.0, 0.0), 2f64.sqrt());
+    close(t(1.0, 0.0, 0.0, 0.0, 0.0), 0.0);
+    close(t(1.0, 1.0, 0.0, 1.0, 0.0), (1.0 + 5f64.sqrt()) / 2.0);
+    close(
+        t(1.0, -0.5, 2.0, -1.0, -FRAC_PI_4),
+        (1.0 + 3f64.sqrt()) / 2.0,
+    );
+    assert_eq!(t(-0.5, 1.0, 0.0, 0.0, FRAC_PI_3), None);
+    assert_eq!(t(0.0, 1.0, 0.0, 0.0, FRAC_PI_3), None);
+}
+
+/// Roots by hand, including the linear case (a = 0): 2 t - 4 = 0 -> t = 2 (twice).
+#[test]
+fn quadratic_roots_by_hand() {
+    assert_eq!(quadratic_roots(0.0f64, 2.0, -4.0), Some([2.0, 2.0]));
+    let [r1, r2] = quadratic_roots(1.0f64, -3.0, 2.0).unwrap();
+    assert!((r1 - 1.0).abs() < 1e-15 && (r2 - 2.0).abs() < 1e-15, "{r1} {r2}");
+    assert_eq!(quadratic_roots(1.0f64, 0.0, 1.0), None);
+}
+
+/// The tilt gain as given; eq. 22's compensation -(1-e)/(1+e) v- componentwise
+/// (e = 0.5: -v/3).
+#[test]
+fn tilt_gain_and_restitution_compensation_by_hand() {
+    assert_eq!(TiltLaw::new(1.7f64).unwrap().kappa(), 1.7);
+    let c = restitution_compensation([3.0f64, -6.0, 1.5], 0.5);
+    for (got, want) in c.iter().zip([-1.0, 2.0, -0.5]) {
+        assert!((got - want).abs() < 1e-15, "{c:?}");
+    }
 }
