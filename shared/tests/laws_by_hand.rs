@@ -4,7 +4,9 @@
 
 use dexter_core::hop::{energy_fixed_point, EnergyServoThrust};
 use dexter_core::planar::{quadratic_roots, ModifiedPlanarLaw, PlanarBall, PlanarMirrorLaw};
-use dexter_core::tilt::{restitution_compensation, TiltLaw};
+use dexter_core::tilt::{
+    restitution_compensation, tilt_eigenvalues, BodyState, EnergyFeedback, TiltLaw,
+};
 use std::f64::consts::{FRAC_PI_3, FRAC_PI_4};
 
 /// Planar mirror gain, eq. 5/12: k(w) = kappa0 + kappa1 (eta* - eta) with
@@ -93,7 +95,10 @@ fn modified_planar_impact_time_by_hand() {
 fn quadratic_roots_by_hand() {
     assert_eq!(quadratic_roots(0.0f64, 2.0, -4.0), Some([2.0, 2.0]));
     let [r1, r2] = quadratic_roots(1.0f64, -3.0, 2.0).unwrap();
-    assert!((r1 - 1.0).abs() < 1e-15 && (r2 - 2.0).abs() < 1e-15, "{r1} {r2}");
+    assert!(
+        (r1 - 1.0).abs() < 1e-15 && (r2 - 2.0).abs() < 1e-15,
+        "{r1} {r2}"
+    );
     assert_eq!(quadratic_roots(1.0f64, 0.0, 1.0), None);
 }
 
@@ -106,4 +111,35 @@ fn tilt_gain_and_restitution_compensation_by_hand() {
     for (got, want) in c.iter().zip([-1.0, 2.0, -0.5]) {
         assert!((got - want).abs() < 1e-15, "{c:?}");
     }
+}
+
+/// Eq. 25's energy at impact, eta = G l cos(theta) + y'^2/2, and its parameters. By hand:
+/// G = 10, l = 0.2, theta = 60 deg, y' = -2: eta = 1 + 2 = 3; eta* = 5, kappa_E = 0.1,
+/// e = 0.5: gain = 1/3 + 0.1 * 2 = 0.5333.
+#[test]
+fn tilt_energy_feedback_by_hand() {
+    let fb = EnergyFeedback::new(0.5f64, 0.1, 5.0, 10.0, 0.2).unwrap();
+    assert_eq!(fb.kappa_e_s2pm2(), 0.1);
+    assert_eq!(fb.target_energy_jpkg(), 5.0);
+    assert!((fb.target_apex_m() - 0.5).abs() < 1e-15);
+    let state = BodyState::new(FRAC_PI_3, 0.0, -2.0, 0.0);
+    assert!((fb.energy_jpkg(&state) - 3.0).abs() < 1e-12);
+    assert!((fb.gain(&state) - (1.0 / 3.0 + 0.2)).abs() < 1e-12);
+}
+
+/// Eigenvalues of the linearized tilt map (eq. 11): with u = y*^2 l (kappa - 1)/(G rho^2),
+/// lambda = 1 - 2u +- 2 sqrt(u (u - 1)). By hand: y* = 2, l = 0.5, G = 4, rho = 1,
+/// kappa = 2: u = 0.5, a complex pair 0 +- 1i; kappa = 3: u = 1, a double root -1;
+/// kappa = 5: u = 2, lambda = -3 -+ 2 sqrt 2.
+#[test]
+fn tilt_eigenvalues_by_hand() {
+    let [a, b] = tilt_eigenvalues(2.0f64, 4.0, 1.0, 0.5, 2.0);
+    assert!(a.0.abs() < 1e-15 && (a.1 - 1.0).abs() < 1e-15, "{a:?}");
+    assert!(b.0.abs() < 1e-15 && (b.1 + 1.0).abs() < 1e-15, "{b:?}");
+    let [a, b] = tilt_eigenvalues(3.0f64, 4.0, 1.0, 0.5, 2.0);
+    assert!((a.0 + 1.0).abs() < 1e-15 && (b.0 + 1.0).abs() < 1e-15);
+    let [a, b] = tilt_eigenvalues(5.0f64, 4.0, 1.0, 0.5, 2.0);
+    let r = 2.0 * 2f64.sqrt();
+    assert!((a.0 - (-3.0 - r)).abs() < 1e-14 && (b.0 - (-3.0 + r)).abs() < 1e-14);
+    assert_eq!((a.1, b.1), (0.0, 0.0));
 }
