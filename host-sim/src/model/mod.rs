@@ -4,6 +4,7 @@
 //! and calls generic code monomorphized for that combination; new models (planar, hopper)
 //! add a variant to [`crate::scene::Model`] and a module here.
 
+pub mod feeder;
 pub mod hopper;
 pub mod line;
 pub mod planar;
