@@ -26,6 +26,7 @@ pub mod geometry;
 pub mod part;
 pub mod quasistatic;
 pub mod sim;
+pub mod stability;
 pub mod support;
 
 pub use geometry::{Pose, Vec2};

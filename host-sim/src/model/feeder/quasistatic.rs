@@ -98,6 +98,11 @@ pub struct Motion {
     pub omega_radps: f64,
     /// The mode that holds.
     pub mode: Mode,
+    /// Total fence force on the part along the fence normal, in the scale-free units of
+    /// eq. (1) (m/s: the relative twist it causes); 0 when free.
+    pub normal_force: f64,
+    /// Total fence force along the fence tangent, same units.
+    pub tangential_force: f64,
 }
 
 /// One unknown force: direction and application point.
@@ -215,6 +220,8 @@ pub fn solve(
         com_mps: Vec2::new(v[0], v[1]),
         omega_radps: v[2],
         mode: Mode::Free,
+        normal_force: 0.0,
+        tangential_force: 0.0,
     }
 }
 
@@ -306,9 +313,18 @@ fn try_mode(ctx: &Ctx, pts: &[(usize, Vec2)], mode: Mode, eps: f64) -> Option<Mo
         .iter()
         .filter(|p| !active.contains(&p.0))
         .all(|&(_, p)| ctx.rel(&v, p, n) >= -eps);
+    let total = |d: Vec2| {
+        forces
+            .iter()
+            .zip(&lam)
+            .map(|(f, l)| l * f.dir.dot(d))
+            .sum::<f64>()
+    };
     (ok && separating).then(|| Motion {
         com_mps: Vec2::new(v[0], v[1]),
         omega_radps: v[2],
         mode,
+        normal_force: total(n),
+        tangential_force: total(t),
     })
 }

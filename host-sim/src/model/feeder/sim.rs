@@ -234,6 +234,8 @@ pub fn run(
         com_mps: Vec2::default(),
         omega_radps: 0.0,
         mode: Mode::Free,
+        normal_force: 0.0,
+        tangential_force: 0.0,
     };
     for steps in 0..MAX_STEPS {
         if let Some(f) = check(part, setup, &pose, &schedule.at(t), t) {
