@@ -22,9 +22,13 @@
 //! half of the belt (x > 0) used. The **contact radius** r is the fence coordinate of the
 //! foot of the perpendicular from the part's center of mass onto the fence.
 
+pub mod execute;
 pub mod geometry;
 pub mod part;
+pub mod planner;
+pub mod primitives;
 pub mod quasistatic;
+pub mod scene;
 pub mod sim;
 pub mod stability;
 pub mod support;

@@ -186,9 +186,24 @@ pub fn hull_on_fence(part: &Part, edge: usize, r_m: f64) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// Range `(min, max)` of `cos` over the interval `[lo, hi]` (rad, `lo <= hi`).
+pub fn cos_range(lo: f64, hi: f64) -> (f64, f64) {
+    use std::f64::consts::{PI, TAU};
+    let (a, b) = (lo.cos(), hi.cos());
+    let (mut mn, mut mx) = (a.min(b), a.max(b));
+    // A multiple of 2 pi (max) or an odd multiple of pi (min) inside the interval.
+    if (lo / TAU).ceil() * TAU <= hi {
+        mx = 1.0;
+    }
+    if ((lo - PI) / TAU).ceil() * TAU + PI <= hi {
+        mn = -1.0;
+    }
+    (mn, mx)
+}
+
 /// Range `(min, max)` of the world x of the part's hull while `edge` lies flush at
-/// contact radius `r_m` and the fence turns from `from_rad` to `to_rad` (sampled on the
-/// angle grid).
+/// contact radius `r_m` and the fence turns between `from_rad` and `to_rad` (exact: each
+/// vertex at fence coordinates `(t, n)` is at `x = |(t, n)| cos(theta + atan2(n, t))`).
 pub fn x_range_on_arc(
     part: &Part,
     edge: usize,
@@ -196,16 +211,30 @@ pub fn x_range_on_arc(
     from_rad: f64,
     to_rad: f64,
 ) -> (f64, f64) {
-    let pts = hull_on_fence(part, edge, r_m);
-    let n = (((to_rad - from_rad).abs() / ANGLE_GRID_RAD).ceil() as usize).max(1);
-    let mut out = (f64::INFINITY, f64::NEG_INFINITY);
-    for i in 0..=n {
-        let th = from_rad + (to_rad - from_rad) * i as f64 / n as f64;
-        let (s, c) = th.sin_cos();
-        for &(t, nn) in &pts {
-            let x = t * c - nn * s;
-            out = (out.0.min(x), out.1.max(x));
-        }
+    let (lo, hi) = (from_rad.min(to_rad), from_rad.max(to_rad));
+    hull_on_fence(part, edge, r_m).into_iter().fold(
+        (f64::INFINITY, f64::NEG_INFINITY),
+        |acc, (t, n)| {
+            let (rho, phi) = (t.hypot(n), n.atan2(t));
+            let (cmin, cmax) = cos_range(lo + phi, hi + phi);
+            (acc.0.min(rho * cmin), acc.1.max(rho * cmax))
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cos_range_finds_interior_extremes() {
+        let (mn, mx) = cos_range(-0.5, 0.5);
+        assert!((mx - 1.0).abs() < 1e-15 && (mn - 0.5f64.cos()).abs() < 1e-15);
+        let (mn, mx) = cos_range(3.0, 3.5);
+        assert!((mn + 1.0).abs() < 1e-15 && (mx - 3.5f64.cos()).abs() < 1e-15);
+        let (mn, mx) = cos_range(0.2, 0.4);
+        assert!((mn - 0.4f64.cos()).abs() < 1e-15 && (mx - 0.2f64.cos()).abs() < 1e-15);
+        let (mn, mx) = cos_range(-7.0, -6.0);
+        assert!((mx - 1.0).abs() < 1e-15 && mn < mx);
     }
-    out
 }
