@@ -121,7 +121,7 @@ pub enum Failure {
         /// When, s.
         t_s: f64,
     },
-    /// A contact would need fence beyond its tip.
+    /// The part rests on the fence with its contact edge overhanging the tip.
     OffFenceTip {
         /// When, s.
         t_s: f64,
@@ -354,10 +354,13 @@ fn check(part: &Part, setup: &Setup, pose: &Pose, fence: &Fence, t: f64) -> Opti
     if lo < 0.0 {
         return Some(Failure::PastPivot { t_s: t });
     }
-    let over_tip = distances(part, pose, fence).iter().any(|(d, s)| {
-        *d <= tol
-            && *s > setup.fence_length_m + tol
-            && *s < setup.fence_length_m + part.radius_m * 4.0
-    });
-    over_tip.then_some(Failure::OffFenceTip { t_s: t })
+    // Resting on the fence (a vertex touching between pivot and tip) while another
+    // touching vertex lies beyond the tip: the contact edge overhangs the fence's end.
+    let d = distances(part, pose, fence);
+    let len = setup.fence_length_m;
+    let on = d
+        .iter()
+        .any(|(d, s)| d.abs() <= tol && (0.0..=len).contains(s));
+    let over = d.iter().any(|(d, s)| d.abs() <= tol && *s > len + tol);
+    (on && over).then_some(Failure::OffFenceTip { t_s: t })
 }

@@ -136,40 +136,55 @@ pub fn jog(f: &Feeder, st: &State, target_m: f64) -> Result<Piece, String> {
         Ok((end, s))
     };
     let (mut tilt_used, mut hold) = (tilt, 0.0);
-    let mut best = outcome(tilt, 0.0)?;
-    let err0 = best.0.r_m - target_m;
-    if err0 * dr.signum() < 0.0 {
-        // The tilt alone falls short: slide, secant on the hold time.
-        hold = (target_m - best.0.r_m).abs() / speed;
-        let mut prev = (0.0, err0);
-        for _ in 0..8 {
-            best = outcome(tilt, hold)?;
-            let err = best.0.r_m - target_m;
-            if err.abs() < JOG_TOL_M {
-                break;
+    let full = outcome(tilt, 0.0);
+    let short = full
+        .as_ref()
+        .is_ok_and(|b| (b.0.r_m - target_m) * dr.signum() < 0.0);
+    let mut best = match full {
+        Ok(b) if short => {
+            // The tilt alone falls short: slide, secant on the hold time.
+            let mut prev = (0.0, b.0.r_m - target_m);
+            hold = (target_m - b.0.r_m).abs() / speed;
+            let mut best = b;
+            for _ in 0..8 {
+                best = outcome(tilt, hold)?;
+                let err = best.0.r_m - target_m;
+                if err.abs() < JOG_TOL_M {
+                    break;
+                }
+                let slope = (err - prev.1) / (hold - prev.0);
+                prev = (hold, err);
+                hold = (hold - err / slope).max(0.0);
             }
-            let slope = (err - prev.1) / (hold - prev.0);
-            prev = (hold, err);
-            hold = (hold - err / slope).max(0.0);
+            Some(best)
         }
-    } else {
-        // Overshoot with no hold: bisect the tilt.
+        _ => None,
+    };
+    if best.is_none() {
+        // The tilt alone overshoots (or slides off): bisect the tilt with no hold.
         let (mut lo, mut hi) = (0.0, tilt.abs());
         for _ in 0..40 {
             let mid = 0.5 * (lo + hi);
-            tilt_used = mid * tilt.signum();
-            best = outcome(tilt_used, 0.0)?;
-            let err = best.0.r_m - target_m;
-            if err.abs() < JOG_TOL_M {
-                break;
-            }
-            if err * dr.signum() > 0.0 {
-                hi = mid
-            } else {
-                lo = mid
+            match outcome(mid * tilt.signum(), 0.0) {
+                Ok(b) => {
+                    let err = b.0.r_m - target_m;
+                    let done = err.abs() < JOG_TOL_M;
+                    if err * dr.signum() > 0.0 {
+                        hi = mid
+                    } else {
+                        lo = mid
+                    }
+                    tilt_used = mid * tilt.signum();
+                    best = Some(b);
+                    if done {
+                        break;
+                    }
+                }
+                Err(_) => hi = mid,
             }
         }
     }
+    let best = best.ok_or_else(|| format!("jog on edge {} found no workable tilt", st.edge))?;
     let (end, sched) = best;
     if (end.r_m - target_m).abs() > 10.0 * JOG_TOL_M {
         return Err(format!(

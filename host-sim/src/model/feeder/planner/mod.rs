@@ -85,23 +85,33 @@ pub struct Plan {
     pub predicted_radius_m: f64,
 }
 
-/// Default goal radius on `goal`, m: within the radii that support the jogs' tilts, the
-/// catches and the fence; a quarter of the way up that window if the edge slides both
-/// ways, near its top if it only slides outward, near its bottom if only inward.
+/// Default goal radius on `goal`, m, within the window of radii the fence, the belt and
+/// the jogs allow: a quarter of the way up it if the edge can be jogged both ways (the
+/// inward jog's tilt is a stable push needing [`RadiusTable::up`]; the outward jog's
+/// return one needing [`RadiusTable::down`]; both need [`can_jog`]), near its top if
+/// only outward, at its bottom if only inward.
 pub fn default_goal_radius(f: &Feeder, t: &RadiusTable, goal: usize) -> f64 {
     let e = &f.part.edges[goal];
-    let tilt = f.drive.jog_tilt_rad;
-    let lo = t.up(goal, tilt).max(t.down(goal, -tilt)).max(e.a_m) * 1.05 + 0.5 * f.part.radius_m;
-    let hi_fence = f.setup.fence_length_m - e.b_m() - 0.5 * f.part.radius_m;
-    let hi_belt = f.setup.belt_edge_m
-        - (x_range_on_arc(&f.part, goal, 0.0, -tilt, tilt).1)
-        - 0.5 * f.part.radius_m;
-    let hi = hi_fence.min(hi_belt).max(lo);
+    let (tilt, pad) = (f.drive.jog_tilt_rad, 0.5 * f.part.radius_m);
+    let hi_fence = f.setup.fence_length_m - e.b_m() - pad;
+    let hi_belt = f.setup.belt_edge_m - (x_range_on_arc(&f.part, goal, 0.0, -tilt, tilt).1) - pad;
+    let hi = hi_fence.min(hi_belt);
     let mu = f.setup.medium.fence_mu;
-    match (can_jog(e, mu, true), can_jog(e, mu, false)) {
-        (true, true) => lo + 0.25 * (hi - lo),
-        (true, false) => lo + 0.9 * (hi - lo),
-        _ => lo,
+    let (up, down) = (t.up(goal, tilt) + pad, t.down(goal, -tilt) + pad);
+    let base = e.a_m + pad;
+    let out_ok = can_jog(e, mu, true) && down.max(base) < hi;
+    let in_ok = can_jog(e, mu, false) && up.max(base) < hi;
+    match (out_ok, in_ok) {
+        (true, true) => {
+            let lo = up.max(down).max(base);
+            lo + 0.25 * (hi - lo)
+        }
+        (true, false) => {
+            let lo = down.max(base);
+            lo + 0.9 * (hi - lo)
+        }
+        (false, true) => up.max(base),
+        (false, false) => 0.5 * (base + hi),
     }
 }
 
