@@ -42,8 +42,8 @@ fn cell(part: Part) -> Feeder {
             belt_edge_m: 1.2,
         },
         drive: Drive {
-            push_rate_radps: 0.5,
-            max_rate_radps: 3.0,
+            push_rate_radps: 2.0,
+            max_rate_radps: 6.0,
             max_angle_rad: 80f64.to_radians(),
             jog_tilt_rad: 0.3f64.atan() + 15f64.to_radians(),
         },

@@ -11,8 +11,8 @@
 //! [fence]
 //! length_m = 0.4
 //! mu = 0.3                          # part-fence Coulomb friction
-//! push_rate_radps = 0.5             # stable pushes and catches
-//! max_rate_radps = 3.0              # dropping away from a drifting part
+//! push_rate_radps = 2.0             # stable pushes and catches
+//! max_rate_radps = 6.0              # dropping away from a drifting part
 //! max_angle_deg = 80.0              # |fence angle| limit, < 90
 //! jog_tilt_deg = 31.7               # optional: atan(mu) + 15 deg, capped at max_angle_deg
 //! [arrival]
@@ -73,11 +73,11 @@ pub struct FenceTable {
     pub length_m: f64,
     /// Part-fence friction (>= 0).
     pub mu: f64,
-    /// Fence rate of stable pushes, rad/s (> 0). Default 0.5.
+    /// Fence rate of stable pushes, rad/s (> 0). Default 2.
     #[serde(default = "default_push_rate")]
     pub push_rate_radps: f64,
     /// Fence rate when dropping away from a drifting part, rad/s (>= push rate).
-    /// Default 3.
+    /// Default 6.
     #[serde(default = "default_max_rate")]
     pub max_rate_radps: f64,
     /// Largest |fence angle|, deg (0 < . < 90). Default 80.
@@ -88,10 +88,10 @@ pub struct FenceTable {
 }
 
 fn default_push_rate() -> f64 {
-    0.5
+    2.0
 }
 fn default_max_rate() -> f64 {
-    3.0
+    6.0
 }
 fn default_max_angle() -> f64 {
     80.0

@@ -22,7 +22,7 @@ pub mod optimize;
 
 use super::geometry::Pose;
 use super::part::Part;
-use super::primitives::{can_jog, turn_min_drift_s, Drive, Primitive};
+use super::primitives::{can_jog, turn_landing_radius_m, turn_min_drift_s, Drive, Primitive};
 use super::sim::{Schedule, Setup};
 use super::stability::x_range_on_arc;
 use super::FeederError;
@@ -193,7 +193,7 @@ fn build(
         return convergent(f, t, st, seq.edges[1], *via, r_goal);
     }
     let sol = optimize::solve(f, t, seq, st.r_m, r_goal)
-        .ok_or_else(|| format!("sequence {:?}: no feasible parameters", seq.edges))?;
+        .map_err(|e| format!("sequence {:?}: {e}", seq.edges))?;
     let mut pieces = Vec::new();
     let mut cur = *st;
     for (k, c) in sol.turns.iter().enumerate() {
@@ -323,21 +323,51 @@ fn diagnose(
     if !(lo..=hi).contains(&r_goal) {
         return format!("goal.contact_radius_m = {r_goal:.4} m is outside the fence's range [{lo:.4}, {hi:.4}] m for goal edge {goal}");
     }
-    let mut need_fence = f64::INFINITY;
-    let mut need_belt = f64::INFINITY;
+    let (mut need_fence, mut need_belt) = (f64::INFINITY, f64::INFINITY);
     for seq in seqs {
         let (mut fence, mut belt) = (0.0f64, 0.0f64);
         for w in seq.edges.windows(2) {
+            let (e, e2) = (&p.edges[w[0]], &p.edges[w[1]]);
             let psi = p.rotation_between(w[0], w[1]);
             let Some((a, b)) = theta_minus_bounds(f.drive.max_angle_rad, psi) else {
                 fence = f64::INFINITY;
                 continue;
             };
-            let tm = 0.5 * (a + b);
-            let r = turn_lower_radius(f, t, w[0], w[1], tm);
-            fence = fence.max(r + p.edges[w[0]].b_m());
-            belt = belt.max(x_range_on_arc(p, w[0], r, 0.0, tm + psi).1);
+            // The least radius over a few catch angles: push, separation, drift time and
+            // the landing radius (r' = A r + B, A = cos theta+ / cos theta-).
+            let best = (0..=4)
+                .map(|i| a + (b - a) * f64::from(i) / 4.0)
+                .map(|tm| {
+                    let tp = tm + psi;
+                    let (aa, bb) = (
+                        tp.cos() / tm.cos(),
+                        turn_landing_radius_m(e, e2, 0.0, psi, tm),
+                    );
+                    let r = turn_lower_radius(f, t, w[0], w[1], tm)
+                        .max((t.down(w[1], tm) - bb) / aa.max(1e-9));
+                    let r2 = aa * r + bb;
+                    let fence = (r + e.b_m()).max(r2 + e2.b_m());
+                    let belt = x_range_on_arc(p, w[0], r, 0.0, tp)
+                        .1
+                        .max(x_range_on_arc(p, w[1], r2, tm, 0.0).1);
+                    (fence, belt)
+                })
+                .fold((f64::INFINITY, f64::INFINITY), |acc, v| {
+                    if v.0 < acc.0 {
+                        v
+                    } else {
+                        acc
+                    }
+                });
+            fence = fence.max(best.0);
+            belt = belt.max(best.1);
         }
+        let g = &p.edges[goal];
+        fence = fence.max(
+            t.up(goal, f.drive.jog_tilt_rad)
+                .min(t.down(goal, -f.drive.jog_tilt_rad))
+                + g.b_m(),
+        );
         need_fence = need_fence.min(fence);
         need_belt = need_belt.min(belt);
     }

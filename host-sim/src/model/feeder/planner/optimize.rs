@@ -172,7 +172,7 @@ impl Ctx<'_> {
     }
 
     /// Objective (s) and constraint values (>= 0 feasible).
-    fn eval(&self, x: &[f64]) -> (f64, Vec<f64>) {
+    fn eval(&self, x: &[f64]) -> (f64, Cons) {
         let turns = self.choices(x);
         let (f, vb) = (self.f, self.f.setup.medium.belt_speed_mps);
         let mu = f.setup.medium.fence_mu;
@@ -211,6 +211,9 @@ fn fence_slack(f: &Feeder, p: &Part, edge: usize, r: f64) -> f64 {
     (f.setup.fence_length_m - r - e.b_m()).min(r - e.a_m) / p.radius_m - PLAN_MARGIN
 }
 
+/// Named constraint values (>= 0 feasible).
+pub type Cons = Vec<(&'static str, f64)>;
+
 /// Constraints of a jog on `edge` from `from` to `to` (appended to `cons`).
 pub fn jog_constraints(
     f: &Feeder,
@@ -218,30 +221,34 @@ pub fn jog_constraints(
     edge: usize,
     from: f64,
     to: f64,
-    cons: &mut Vec<f64>,
+    cons: &mut Cons,
 ) {
     let (p, mu, tilt) = (&f.part, f.setup.medium.fence_mu, f.drive.jog_tilt_rad);
     let e = &p.edges[edge];
     let scale = p.radius_m;
     let d = (to - from) / scale;
     let slack = 1e-4 / scale;
-    cons.push(if can_jog(e, mu, true) { 1.0 } else { slack - d });
-    cons.push(if can_jog(e, mu, false) {
+    let out = if can_jog(e, mu, true) { 1.0 } else { slack - d };
+    cons.push(("jog: the edge cannot slide outward without tipping", out));
+    let inward = if can_jog(e, mu, false) {
         1.0
     } else {
         slack + d
-    });
-    cons.push(fence_slack(f, p, edge, to));
+    };
+    cons.push(("jog: the edge cannot slide inward without tipping", inward));
+    cons.push(("jog: contact beyond the fence", fence_slack(f, p, edge, to)));
     // Inward: the tilt up is a stable push at the starting radius; outward: the return
     // from -tilt is a stable push at the final radius.
-    cons.push(d.max((from - t.up(edge, tilt)) / scale - PLAN_MARGIN));
-    cons.push((-d).max((to - t.down(edge, -tilt)) / scale - PLAN_MARGIN));
-    let active = d.abs() > 1e-4 / scale;
-    cons.push(if active {
+    let up = d.max((from - t.up(edge, tilt)) / scale - PLAN_MARGIN);
+    cons.push(("jog: radius below the minimum for the inward tilt", up));
+    let down = (-d).max((to - t.down(edge, -tilt)) / scale - PLAN_MARGIN);
+    cons.push(("jog: radius below the minimum for the outward return", down));
+    let belt = if d.abs() > 1e-4 / scale {
         belt_slack(f, edge, from, -tilt, tilt).min(belt_slack(f, edge, to, -tilt, tilt))
     } else {
         1.0
-    });
+    };
+    cons.push(("jog: part off the belt", belt));
 }
 
 /// Constraints of one turn (appended to `cons`).
@@ -251,22 +258,42 @@ pub fn turn_constraints(
     from: usize,
     to: usize,
     c: &TurnChoice,
-    cons: &mut Vec<f64>,
+    cons: &mut Cons,
 ) {
     let p = &f.part;
     let (vb, scale) = (f.setup.medium.belt_speed_mps, p.radius_m);
-    cons.push((c.r_before_m - t.up(from, c.theta_plus_rad)) / scale - PLAN_MARGIN);
-    cons.push((c.r_after_m - t.down(to, c.theta_minus_rad)) / scale - PLAN_MARGIN);
-    cons.push(fence_slack(f, p, from, c.r_before_m));
-    cons.push(fence_slack(f, p, to, c.r_after_m));
-    cons.push(belt_slack(f, from, c.r_before_m, 0.0, c.theta_plus_rad));
-    cons.push(belt_slack(f, to, c.r_after_m, c.theta_minus_rad, 0.0));
+    let up = (c.r_before_m - t.up(from, c.theta_plus_rad)) / scale - PLAN_MARGIN;
+    cons.push(("turn: radius below the minimum for the push to theta+", up));
+    let down = (c.r_after_m - t.down(to, c.theta_minus_rad)) / scale - PLAN_MARGIN;
+    cons.push((
+        "turn: landing radius below the minimum for the push from theta-",
+        down,
+    ));
+    cons.push((
+        "turn: contact beyond the fence before",
+        fence_slack(f, p, from, c.r_before_m),
+    ));
+    cons.push((
+        "turn: contact beyond the fence after landing",
+        fence_slack(f, p, to, c.r_after_m),
+    ));
+    let b1 = belt_slack(f, from, c.r_before_m, 0.0, c.theta_plus_rad);
+    cons.push(("turn: part off the belt during the push to theta+", b1));
+    let b2 = belt_slack(f, to, c.r_after_m, c.theta_minus_rad, 0.0);
+    cons.push(("turn: part off the belt during the push from theta-", b2));
     let min_drift = turn_min_drift_s(&f.drive, c.theta_plus_rad, c.theta_minus_rad);
-    cons.push(c.drift_m / vb - 1.05 * min_drift - 0.01);
+    cons.push((
+        "turn: drift too short to drop the fence and rise again",
+        c.drift_m / vb - 1.05 * min_drift - 0.01,
+    ));
     let sep = f.drive.max_rate_radps * (c.r_before_m - p.edges[from].a_m)
         - 1.2 * vb * c.theta_plus_rad.cos();
-    cons.push(sep / (vb.abs() + 1e-12));
-    cons.push(drift_clearance(f, from, c) / scale - PLAN_MARGIN);
+    cons.push((
+        "turn: the fence cannot leave the part faster than it drifts",
+        sep / (vb.abs() + 1e-12),
+    ));
+    let clear = drift_clearance(f, from, c) / scale - PLAN_MARGIN;
+    cons.push(("turn: the fence touches the part during the drift", clear));
 }
 
 /// Smallest distance, m, between the fence segment and the drifting part, sampled over
@@ -314,20 +341,25 @@ pub fn drift_clearance(f: &Feeder, from: usize, c: &TurnChoice) -> f64 {
 }
 
 /// Optimizes the regular turns of `seq` from arrival radius `r0` to goal radius
-/// `r_goal`. `None` when no feasible parameters were found.
+/// `r_goal`. When no feasible parameters were found: the most violated constraint.
 pub fn solve(
     f: &Feeder,
     t: &RadiusTable,
     seq: &Sequence,
     r0: f64,
     r_goal: f64,
-) -> Option<Solution> {
+) -> Result<Solution, String> {
     let p = &f.part;
     let mut bounds = Vec::new();
     let mut psi = Vec::new();
     for w in seq.edges.windows(2) {
         let ps = p.rotation_between(w[0], w[1]);
-        let (lo, hi) = theta_minus_bounds(f.drive.max_angle_rad, ps)?;
+        let (lo, hi) = theta_minus_bounds(f.drive.max_angle_rad, ps).ok_or_else(|| {
+            format!(
+                "a {:.0} deg turn needs fence angles beyond fence.max_angle_deg",
+                ps.to_degrees()
+            )
+        })?;
         let e = &p.edges[w[0]];
         bounds.push((e.a_m, (f.setup.fence_length_m - e.b_m()).max(e.a_m)));
         bounds.push((lo, hi));
@@ -344,14 +376,17 @@ pub fn solve(
     };
     if seq.hops.is_empty() {
         let (cost, cons) = ctx.eval(&[]);
-        return cons.iter().all(|&c| c >= -1e-9).then_some(Solution {
-            turns: vec![],
-            cost_s: cost,
-        });
+        return match worst(&cons) {
+            Some(w) if w.1 < -1e-9 => Err(w.0.to_string()),
+            _ => Ok(Solution {
+                turns: vec![],
+                cost_s: cost,
+            }),
+        };
     }
     let x0 = greedy_start(&ctx);
-    let cache: RefCell<Option<(Vec<f64>, (f64, Vec<f64>))>> = RefCell::new(None);
-    let eval = |x: &[f64]| -> (f64, Vec<f64>) {
+    let cache: RefCell<Option<(Vec<f64>, (f64, Cons))>> = RefCell::new(None);
+    let eval = |x: &[f64]| -> (f64, Cons) {
         if let Some((cx, v)) = cache.borrow().as_ref() {
             if cx.as_slice() == x {
                 return v.clone();
@@ -364,7 +399,7 @@ pub fn solve(
     let n_cons = eval(&x0).1.len();
     let eval_ref = &eval;
     let cons_fns: Vec<_> = (0..n_cons)
-        .map(|i| move |x: &[f64], _: &mut ()| eval_ref(x).1[i])
+        .map(|i| move |x: &[f64], _: &mut ()| eval_ref(x).1[i].1)
         .collect();
     let cons: Vec<&dyn Func<()>> = cons_fns.iter().map(|c| c as &dyn Func<()>).collect();
     let unit = vec![(0.0, 1.0); x0.len()];
@@ -383,15 +418,30 @@ pub fn solve(
         Some(stop),
     );
     let candidates = [result.map(|r| r.1).unwrap_or_else(|e| e.1), x0];
-    candidates
+    let evals: Vec<(&Vec<f64>, (f64, Cons))> = candidates.iter().map(|x| (x, eval(x))).collect();
+    let best = evals
         .iter()
-        .map(|x| (x, eval(x)))
-        .filter(|(_, (_, c))| c.iter().all(|&v| v >= -1e-7))
-        .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
-        .map(|(x, (cost, _))| Solution {
+        .filter(|(_, (_, c))| c.iter().all(|v| v.1 >= -1e-7))
+        .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0));
+    match best {
+        Some((x, (cost, _))) => Ok(Solution {
             turns: ctx.choices(x),
-            cost_s: cost,
-        })
+            cost_s: *cost,
+        }),
+        None => Err(evals
+            .iter()
+            .filter_map(|(_, (_, c))| worst(c))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or_else(
+                || "no feasible parameters".into(),
+                |w| format!("{} (by {:.3} part radii)", w.0, -w.1),
+            )),
+    }
+}
+
+/// The most violated constraint.
+fn worst(cons: &Cons) -> Option<(&'static str, f64)> {
+    cons.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1))
 }
 
 /// A feasible-leaning start: theta- splits Psi evenly (within bounds); r_k the least
@@ -412,7 +462,7 @@ fn greedy_start(ctx: &Ctx) -> Vec<f64> {
             let worst = cons
                 .iter()
                 .take(16 * (k + 1))
-                .fold(f64::INFINITY, |a, &c| a.min(c));
+                .fold(f64::INFINITY, |a, c| a.min(c.1));
             if best.is_none_or(|bb| worst > bb.2) {
                 best = Some((r, frac, worst));
             }
