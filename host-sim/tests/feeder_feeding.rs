@@ -4,8 +4,9 @@
 //! the paper says it must.
 //!
 //! The paper proves the property for an infinitely long fence over an infinitely wide
-//! belt with fence angles anywhere in (-90, 90) deg. We use a long fence (1.2 m) and wide
-//! belt (2.4 m) and fence angles within +-80 deg, so "must have a plan" here means: every
+//! belt with fence angles anywhere in (-90, 90) deg. We use a long fence (3 m) and wide
+//! belt (6 m) for parts about 5 cm across, and fence angles within +-80 deg, so "must
+//! have a plan" here means: every
 //! counter-clockwise gap between consecutive stable edges that a plan may have to cross
 //! is at most 150 deg (turns need theta+ - theta- = Psi within +-80 deg), and no hull
 //! edge is within 5 % of its length of the stable/unstable boundary (the minimum contact
@@ -38,8 +39,8 @@ fn cell(part: Part) -> Feeder {
                 belt_speed_mps: 0.05,
                 fence_mu: 0.3,
             },
-            fence_length_m: 1.2,
-            belt_edge_m: 1.2,
+            fence_length_m: 3.0,
+            belt_edge_m: 3.0,
         },
         drive: Drive {
             push_rate_radps: 2.0,

@@ -48,6 +48,11 @@ use serde::Serialize;
 /// the push rate when the part's new edge meets it.
 pub const CATCH_RUN_UP_RAD: f64 = 0.05;
 
+/// Hold at angle 0 that ends every turn and jog, s: the part is at rest on the fence
+/// before the next primitive starts (with theta- = 0 the catch is the turn's last
+/// instant, and without the hold the next push would start as the part lands).
+pub const SETTLE_S: f64 = 0.05;
+
 /// Fence motion limits and the belt's speed: what a schedule may command.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Drive {
@@ -184,6 +189,7 @@ pub fn turn_schedule(
     s.hold(rise_start - s.end_s());
     s.move_to(theta_minus, drive.push_rate_radps);
     s.move_to(0.0, drive.push_rate_radps);
+    s.hold(SETTLE_S);
     Some((s, t_catch))
 }
 

@@ -227,7 +227,29 @@ pub fn run(
     start: Pose,
     t0_s: f64,
     t1_s: f64,
+    observe: impl FnMut(f64, &Pose, &Motion),
+) -> Outcome {
+    run_until(
+        part,
+        setup,
+        schedule,
+        (start, t0_s, t1_s),
+        observe,
+        |_, _| false,
+    )
+}
+
+/// [`run`] that also stops, before stepping, as soon as `stop(pose, motion)` holds. A
+/// later [`run`] from the same start to the returned time takes the very same steps, so
+/// a planner that finds an event time this way and an execution replaying the schedule
+/// agree exactly.
+pub fn run_until(
+    part: &Part,
+    setup: &Setup,
+    schedule: &Schedule,
+    (start, t0_s, t1_s): (Pose, f64, f64),
     mut observe: impl FnMut(f64, &Pose, &Motion),
+    mut stop: impl FnMut(&Pose, &Motion) -> bool,
 ) -> Outcome {
     let (mut t, mut pose) = (t0_s, start);
     let mut motion = Motion {
@@ -237,44 +259,40 @@ pub fn run(
         normal_force: 0.0,
         tangential_force: 0.0,
     };
+    let end = |t_s, pose, motion, failure, steps| Outcome {
+        t_s,
+        pose,
+        motion,
+        failure,
+        steps,
+    };
     for steps in 0..MAX_STEPS {
         if let Some(f) = check(part, setup, &pose, &schedule.at(t), t) {
-            return Outcome {
-                t_s: t,
-                pose,
-                motion,
-                failure: Some(f),
-                steps,
-            };
+            return end(t, pose, motion, Some(f), steps);
         }
         if t >= t1_s {
-            return Outcome {
-                t_s: t,
-                pose,
-                motion,
-                failure: None,
-                steps,
-            };
+            return end(t, pose, motion, None, steps);
         }
         let fence = schedule.at(t);
         let touch = touching(part, &pose, &fence, setup.fence_length_m);
         motion = quasistatic::solve(part, &pose, fence, &setup.medium, &touch);
+        if stop(&pose, &motion) {
+            return end(t, pose, motion, None, steps);
+        }
         let mut dt = step_limit(part, &motion, &fence).min(t1_s - t);
         if let Some(k) = schedule.next_knot(t) {
             dt = dt.min(k - t);
         }
-        let next = step(part, setup, schedule, &pose, &motion, &touch, t, dt);
-        t = next.0;
-        pose = next.1;
+        (t, pose) = step(part, setup, schedule, &pose, &motion, &touch, t, dt);
         observe(t, &pose, &motion);
     }
-    Outcome {
-        t_s: t,
+    end(
+        t,
         pose,
         motion,
-        failure: Some(Failure::TooLong { t_s: t }),
-        steps: MAX_STEPS,
-    }
+        Some(Failure::TooLong { t_s: t }),
+        MAX_STEPS,
+    )
 }
 
 /// One step of at most `dt`: midpoint rule for pivoting/sliding modes, shortened so no

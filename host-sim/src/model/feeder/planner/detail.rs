@@ -3,9 +3,9 @@
 //! left: what the execution will do, noise aside.
 
 use super::super::geometry::Pose;
-use super::super::primitives::{slide_speed_mps, turn_drift_m, turn_schedule, Primitive};
-use super::super::quasistatic::Mode;
-use super::super::sim::{flush_edge, run, Schedule};
+use super::super::primitives::{slide_speed_mps, turn_drift_m, turn_schedule, Primitive, SETTLE_S};
+use super::super::quasistatic::{Mode, Motion};
+use super::super::sim::{flush_edge, run, run_until, Schedule};
 use super::Feeder;
 
 /// The part at rest, flush on the fence at angle 0.
@@ -21,8 +21,6 @@ pub struct State {
     pub r_m: f64,
 }
 
-/// Short hold at the end of a jog so the part is at rest before the next step, s.
-pub const SETTLE_S: f64 = 0.05;
 /// Radius tolerance of a planned jog, m (well inside the 1 mm feeding tolerance).
 pub const JOG_TOL_M: f64 = 2e-5;
 
@@ -54,42 +52,49 @@ pub fn settle_on(f: &Feeder, st: &State, sched: &Schedule) -> Result<State, Stri
     })
 }
 
-/// The arriving part drifts onto the fence held at 0 and settles: simulated in chunks
-/// until it is at rest flush on an edge (at most `max_s`).
+/// The arriving part drifts onto the fence held at 0 and settles: simulated until it is
+/// at rest flush on an edge (at most `max_s`), stopping at the exact step the execution
+/// will reach too ([`run_until`]).
 pub fn arrive(f: &Feeder, arrival: Pose, max_s: f64) -> Result<Piece, String> {
     let mut sched = Schedule::starting(0.0, 0.0);
-    let (mut t, mut pose) = (0.0, arrival);
-    while t < max_s {
-        let out = run(&f.part, &f.setup, &sched, pose, t, t + 0.25, |_, _, _| {});
-        if let Some(fail) = out.failure {
-            return Err(format!("arrival: {fail:?}"));
-        }
-        (t, pose) = (out.t_s, out.pose);
-        let resting = matches!(out.motion.mode, Mode::LineStick(..))
-            && out.motion.com_mps.norm() < 1e-9
-            && out.motion.omega_radps.abs() < 1e-9;
-        if resting {
-            let fence = sched.at(t);
-            let edge = flush_edge(&f.part, &pose, &fence, f.setup.fence_length_m)
-                .ok_or("arrival: not flush")?;
-            sched.hold(t);
-            let st = State {
-                t_s: t,
-                pose,
-                edge,
-                r_m: pose.com_m.x,
-            };
-            let prim = Primitive::Catch {
-                edge,
-                contact_radius_m: st.r_m,
-                duration_s: t,
-            };
-            return Ok((st, prim, sched));
-        }
+    let resting = |_: &Pose, m: &Motion| {
+        matches!(m.mode, Mode::LineStick(..))
+            && m.com_mps.norm() < 1e-9
+            && m.omega_radps.abs() < 1e-9
+    };
+    let out = run_until(
+        &f.part,
+        &f.setup,
+        &sched,
+        (arrival, 0.0, max_s),
+        |_, _, _| {},
+        resting,
+    );
+    if let Some(fail) = out.failure {
+        return Err(format!("arrival: {fail:?}"));
     }
-    Err(format!(
-        "arrival: the part did not come to rest on the fence within {max_s} s"
-    ))
+    if !resting(&out.pose, &out.motion) {
+        return Err(format!(
+            "arrival: the part did not come to rest on the fence within {max_s} s"
+        ));
+    }
+    let (t, pose) = (out.t_s, out.pose);
+    let fence = sched.at(t);
+    let edge =
+        flush_edge(&f.part, &pose, &fence, f.setup.fence_length_m).ok_or("arrival: not flush")?;
+    sched.hold(t);
+    let st = State {
+        t_s: t,
+        pose,
+        edge,
+        r_m: pose.com_m.x,
+    };
+    let prim = Primitive::Catch {
+        edge,
+        contact_radius_m: st.r_m,
+        duration_s: t,
+    };
+    Ok((st, prim, sched))
 }
 
 /// Schedule of a jog from `st` with tilt `tilt` (> 0 inward) held `hold_s`.
