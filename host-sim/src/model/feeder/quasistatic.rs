@@ -245,57 +245,46 @@ fn candidates(pts: &[(usize, Vec2)]) -> Vec<Mode> {
     out
 }
 
-fn try_mode(ctx: &Ctx, pts: &[(usize, Vec2)], mode: Mode, eps: f64) -> Option<Motion> {
+/// Unknown forces, zero-velocity rows and active vertices of `mode`.
+type System = (Vec<Force>, Vec<(Vec2, Vec2)>, Vec<usize>);
+
+fn point_of(pts: &[(usize, Vec2)], i: usize) -> Vec2 {
+    pts.iter()
+        .find(|p| p.0 == i)
+        .map(|p| p.1)
+        .unwrap_or_default()
+}
+
+/// The linear system of `mode`: which forces are unknown and which relative velocities
+/// vanish.
+fn system(ctx: &Ctx, pts: &[(usize, Vec2)], mode: Mode) -> System {
     let (n, t, mu) = (ctx.fence.normal(), ctx.fence.tangent(), ctx.medium.fence_mu);
-    let at = |i: usize| {
-        pts.iter()
-            .find(|p| p.0 == i)
-            .map(|p| p.1)
-            .unwrap_or_default()
-    };
+    let at = |i| point_of(pts, i);
     let slide = |s: i8| n - t.scale(f64::from(s) * mu);
-    let (forces, rows, active): (Vec<Force>, Vec<(Vec2, Vec2)>, Vec<usize>) = match mode {
+    let f = |dir, at| Force { dir, at };
+    match mode {
         Mode::Free => (vec![], vec![], vec![]),
-        Mode::PointStick(i) => {
-            let p = at(i);
-            (
-                vec![Force { dir: n, at: p }, Force { dir: t, at: p }],
-                vec![(p, n), (p, t)],
-                vec![i],
-            )
-        }
-        Mode::PointSlide(i, s) => (
-            vec![Force {
-                dir: slide(s),
-                at: at(i),
-            }],
-            vec![(at(i), n)],
+        Mode::PointStick(i) => (
+            vec![f(n, at(i)), f(t, at(i))],
+            vec![(at(i), n), (at(i), t)],
             vec![i],
         ),
+        Mode::PointSlide(i, s) => (vec![f(slide(s), at(i))], vec![(at(i), n)], vec![i]),
         Mode::LineStick(a, b) => {
-            let (pa, pb) = (at(a), at(b));
-            let fs = vec![
-                Force { dir: n, at: pa },
-                Force { dir: n, at: pb },
-                Force { dir: t, at: pa },
-            ];
-            (fs, vec![(pa, n), (pb, n), (pa, t)], vec![a, b])
+            let fs = vec![f(n, at(a)), f(n, at(b)), f(t, at(a))];
+            (fs, vec![(at(a), n), (at(b), n), (at(a), t)], vec![a, b])
         }
         Mode::LineSlide(a, b, s) => {
-            let (pa, pb) = (at(a), at(b));
-            let fs = vec![
-                Force {
-                    dir: slide(s),
-                    at: pa,
-                },
-                Force {
-                    dir: slide(s),
-                    at: pb,
-                },
-            ];
-            (fs, vec![(pa, n), (pb, n)], vec![a, b])
+            let fs = vec![f(slide(s), at(a)), f(slide(s), at(b))];
+            (fs, vec![(at(a), n), (at(b), n)], vec![a, b])
         }
-    };
+    }
+}
+
+fn try_mode(ctx: &Ctx, pts: &[(usize, Vec2)], mode: Mode, eps: f64) -> Option<Motion> {
+    let (n, t, mu) = (ctx.fence.normal(), ctx.fence.tangent(), ctx.medium.fence_mu);
+    let at = |i| point_of(pts, i);
+    let (forces, rows, active) = system(ctx, pts, mode);
     let lam = ctx.magnitudes(&forces, &rows)?;
     let v = ctx.twist(&forces, &lam);
     let ok = match mode {

@@ -87,6 +87,53 @@ pub struct FenceTable {
     pub jog_tilt_deg: Option<f64>,
 }
 
+impl FenceTable {
+    /// The fence's rates and angle limits, validated (the jog tilt must exceed the
+    /// friction angle atan mu so the part slides).
+    pub fn drive(&self) -> Result<Drive, FeederError> {
+        let push = check(
+            "fence.push_rate_radps",
+            self.push_rate_radps,
+            |v| v > 0.0,
+            "must be > 0",
+        )?;
+        let max_rate = check(
+            "fence.max_rate_radps",
+            self.max_rate_radps,
+            |v| v >= push,
+            "must be >= fence.push_rate_radps",
+        )?;
+        let max_angle = check(
+            "fence.max_angle_deg",
+            self.max_angle_deg,
+            |v| v > 0.0 && v < 90.0,
+            "must be in (0, 90)",
+        )?
+        .to_radians();
+        let friction_angle = check("fence.mu", self.mu, |v| v >= 0.0, "must be >= 0")?.atan();
+        let tilt_default = (friction_angle + 15f64.to_radians()).min(max_angle);
+        let jog_tilt_rad = match self.jog_tilt_deg {
+            Some(d) => check(
+                "fence.jog_tilt_deg",
+                d.to_radians(),
+                |v| v > friction_angle && v <= max_angle,
+                "must exceed atan(fence.mu) and not exceed fence.max_angle_deg",
+            )?,
+            None if tilt_default > friction_angle + 1e-3 => tilt_default,
+            None => {
+                let why = "must exceed atan(fence.mu) so the jogs can slide the part";
+                return Err(FeederError::param("fence.max_angle_deg", why));
+            }
+        };
+        Ok(Drive {
+            push_rate_radps: push,
+            max_rate_radps: max_rate,
+            max_angle_rad: max_angle,
+            jog_tilt_rad,
+        })
+    }
+}
+
 fn default_push_rate() -> f64 {
     2.0
 }
@@ -251,45 +298,8 @@ impl FeederScene {
             "must be > 0 (the belt moves in -y)",
         )?;
         let width = check("belt.width_m", self.belt.width_m, pos, "must be > 0")?;
-        let fl = &self.fence;
-        let length = check("fence.length_m", fl.length_m, pos, "must be > 0")?;
-        let mu = check("fence.mu", fl.mu, |v| v >= 0.0, "must be >= 0")?;
-        let push = check(
-            "fence.push_rate_radps",
-            fl.push_rate_radps,
-            pos,
-            "must be > 0",
-        )?;
-        let max_rate = check(
-            "fence.max_rate_radps",
-            fl.max_rate_radps,
-            |v| v >= push,
-            "must be >= fence.push_rate_radps",
-        )?;
-        let max_angle = check(
-            "fence.max_angle_deg",
-            fl.max_angle_deg,
-            |v| v > 0.0 && v < 90.0,
-            "must be in (0, 90)",
-        )?
-        .to_radians();
-        let friction_angle = mu.atan();
-        let tilt_default = (friction_angle + 15f64.to_radians()).min(max_angle);
-        let tilt = match fl.jog_tilt_deg {
-            Some(d) => check(
-                "fence.jog_tilt_deg",
-                d.to_radians(),
-                |v| v > friction_angle && v <= max_angle,
-                "must exceed atan(fence.mu) and not exceed fence.max_angle_deg",
-            )?,
-            None if tilt_default > friction_angle + 1e-3 => tilt_default,
-            None => {
-                return Err(FeederError::param(
-                    "fence.max_angle_deg",
-                    "must exceed atan(fence.mu) so the jogs can slide the part",
-                ))
-            }
-        };
+        let length = check("fence.length_m", self.fence.length_m, pos, "must be > 0")?;
+        let mu = check("fence.mu", self.fence.mu, |v| v >= 0.0, "must be >= 0")?;
         let feeder = Feeder {
             part,
             setup: Setup {
@@ -300,12 +310,7 @@ impl FeederScene {
                 fence_length_m: length,
                 belt_edge_m: width / 2.0,
             },
-            drive: Drive {
-                push_rate_radps: push,
-                max_rate_radps: max_rate,
-                max_angle_rad: max_angle,
-                jog_tilt_rad: tilt,
-            },
+            drive: self.fence.drive()?,
         };
         let arrival = self.arrival_pose(&feeder)?;
         let goal = match self.goal.contact_radius_m {

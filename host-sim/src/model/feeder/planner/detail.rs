@@ -118,6 +118,9 @@ fn jog_schedule(f: &Feeder, st: &State, tilt: f64, hold_s: f64) -> Schedule {
     s
 }
 
+/// A simulated jog outcome: the rest state and the schedule.
+type Tried = Result<(State, Schedule), String>;
+
 /// Plans the jog from `st` to radius `target_m` on the same edge: the hold time by a
 /// secant iteration on simulated outcomes (then the tilt, for changes smaller than the
 /// tilt alone makes).
@@ -128,8 +131,7 @@ pub fn jog(f: &Feeder, st: &State, target_m: f64) -> Result<Piece, String> {
     } else {
         -f.drive.jog_tilt_rad
     };
-    let speed = slide_speed_mps(f.setup.medium.belt_speed_mps, f.setup.medium.fence_mu, tilt);
-    let outcome = |tilt: f64, hold: f64| -> Result<(State, Schedule), String> {
+    let outcome = |tilt: f64, hold: f64| -> Tried {
         let s = jog_schedule(f, st, tilt, hold);
         let end = settle_on(f, st, &s)?;
         if end.edge != st.edge {
@@ -140,56 +142,23 @@ pub fn jog(f: &Feeder, st: &State, target_m: f64) -> Result<Piece, String> {
         }
         Ok((end, s))
     };
-    let (mut tilt_used, mut hold) = (tilt, 0.0);
     let full = outcome(tilt, 0.0);
     let short = full
         .as_ref()
         .is_ok_and(|b| (b.0.r_m - target_m) * dr.signum() < 0.0);
-    let mut best = match full {
+    let (tilt_used, hold, best) = match full {
         Ok(b) if short => {
-            // The tilt alone falls short: slide, secant on the hold time.
-            let mut prev = (0.0, b.0.r_m - target_m);
-            hold = (target_m - b.0.r_m).abs() / speed;
-            let mut best = b;
-            for _ in 0..8 {
-                best = outcome(tilt, hold)?;
-                let err = best.0.r_m - target_m;
-                if err.abs() < JOG_TOL_M {
-                    break;
-                }
-                let slope = (err - prev.1) / (hold - prev.0);
-                prev = (hold, err);
-                hold = (hold - err / slope).max(0.0);
-            }
-            Some(best)
+            let speed =
+                slide_speed_mps(f.setup.medium.belt_speed_mps, f.setup.medium.fence_mu, tilt);
+            let (hold, best) = secant_hold(&outcome, b, tilt, target_m, speed)?;
+            (tilt, hold, best)
         }
-        _ => None,
+        _ => {
+            let (t, best) = bisect_tilt(&outcome, tilt, target_m, dr)
+                .ok_or_else(|| format!("jog on edge {} found no workable tilt", st.edge))?;
+            (t, 0.0, best)
+        }
     };
-    if best.is_none() {
-        // The tilt alone overshoots (or slides off): bisect the tilt with no hold.
-        let (mut lo, mut hi) = (0.0, tilt.abs());
-        for _ in 0..40 {
-            let mid = 0.5 * (lo + hi);
-            match outcome(mid * tilt.signum(), 0.0) {
-                Ok(b) => {
-                    let err = b.0.r_m - target_m;
-                    let done = err.abs() < JOG_TOL_M;
-                    if err * dr.signum() > 0.0 {
-                        hi = mid
-                    } else {
-                        lo = mid
-                    }
-                    tilt_used = mid * tilt.signum();
-                    best = Some(b);
-                    if done {
-                        break;
-                    }
-                }
-                Err(_) => hi = mid,
-            }
-        }
-    }
-    let best = best.ok_or_else(|| format!("jog on edge {} found no workable tilt", st.edge))?;
     let (end, sched) = best;
     if (end.r_m - target_m).abs() > 10.0 * JOG_TOL_M {
         return Err(format!(
@@ -207,6 +176,62 @@ pub fn jog(f: &Feeder, st: &State, target_m: f64) -> Result<Piece, String> {
         duration_s: end.t_s - st.t_s,
     };
     Ok((end, prim, sched))
+}
+
+/// The tilt alone falls short: slide longer, secant on the hold time from the first
+/// guess |remaining| / slide speed.
+fn secant_hold(
+    outcome: &impl Fn(f64, f64) -> Tried,
+    at_zero: (State, Schedule),
+    tilt: f64,
+    target_m: f64,
+    speed: f64,
+) -> Result<(f64, (State, Schedule)), String> {
+    let mut prev = (0.0, at_zero.0.r_m - target_m);
+    let mut hold = (target_m - at_zero.0.r_m).abs() / speed;
+    let mut best = (0.0, at_zero);
+    for _ in 0..8 {
+        let b = outcome(tilt, hold)?;
+        let err = b.0.r_m - target_m;
+        best = (hold, b);
+        if err.abs() < JOG_TOL_M {
+            break;
+        }
+        let slope = (err - prev.1) / (hold - prev.0);
+        prev = (hold, err);
+        hold = (hold - err / slope).max(0.0);
+    }
+    Ok(best)
+}
+
+/// The tilt alone overshoots (or slides off the fence): bisect the tilt with no hold.
+fn bisect_tilt(
+    outcome: &impl Fn(f64, f64) -> Tried,
+    tilt: f64,
+    target_m: f64,
+    dr: f64,
+) -> Option<(f64, (State, Schedule))> {
+    let (mut lo, mut hi) = (0.0, tilt.abs());
+    let mut best = None;
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        match outcome(mid * tilt.signum(), 0.0) {
+            Ok(b) => {
+                let err = b.0.r_m - target_m;
+                if err * dr.signum() > 0.0 {
+                    hi = mid
+                } else {
+                    lo = mid
+                }
+                best = Some((mid * tilt.signum(), b));
+                if err.abs() < JOG_TOL_M {
+                    break;
+                }
+            }
+            Err(_) => hi = mid,
+        }
+    }
+    best
 }
 
 /// A turn (or, with `via`, a convergent turn) from `st` onto `to_edge` with catch angle

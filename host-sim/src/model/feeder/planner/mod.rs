@@ -293,6 +293,51 @@ fn convergent_try(
     Ok(pieces)
 }
 
+/// Least fence length and belt half width, m, a sequence needs: over each turn, the
+/// least radius meeting the push, separation, drift-time and landing bounds, for the
+/// best of a few catch angles (r' = A r + B, A = cos theta+ / cos theta-); and the goal
+/// edge's jog tilts.
+fn sequence_needs(f: &Feeder, t: &RadiusTable, seq: &Sequence, goal: usize) -> (f64, f64) {
+    let p = &f.part;
+    let (mut fence, mut belt) = (0.0f64, 0.0f64);
+    for w in seq.edges.windows(2) {
+        let (e, e2) = (&p.edges[w[0]], &p.edges[w[1]]);
+        let psi = p.rotation_between(w[0], w[1]);
+        let Some((a, b)) = theta_minus_bounds(f.drive.max_angle_rad, psi) else {
+            return (f64::INFINITY, f64::INFINITY);
+        };
+        let best = (0..=4)
+            .map(|i| a + (b - a) * f64::from(i) / 4.0)
+            .map(|tm| {
+                let tp = tm + psi;
+                let (aa, bb) = (
+                    tp.cos() / tm.cos(),
+                    turn_landing_radius_m(e, e2, 0.0, psi, tm),
+                );
+                let r = turn_lower_radius(f, t, w[0], w[1], tm)
+                    .max((t.down(w[1], tm) - bb) / aa.max(1e-9));
+                let r2 = aa * r + bb;
+                let need = (r + e.b_m()).max(r2 + e2.b_m());
+                let x = x_range_on_arc(p, w[0], r, 0.0, tp)
+                    .1
+                    .max(x_range_on_arc(p, w[1], r2, tm, 0.0).1);
+                (need, x)
+            })
+            .fold((f64::INFINITY, f64::INFINITY), |acc, v| {
+                if v.0 < acc.0 {
+                    v
+                } else {
+                    acc
+                }
+            });
+        fence = fence.max(best.0);
+        belt = belt.max(best.1);
+    }
+    let (g, tilt) = (&p.edges[goal], f.drive.jog_tilt_rad);
+    fence = fence.max(t.up(goal, tilt).min(t.down(goal, -tilt)) + g.b_m());
+    (fence, belt)
+}
+
 /// Names the binding limit when no sequence is feasible.
 #[allow(clippy::too_many_arguments)]
 fn diagnose(
@@ -325,49 +370,7 @@ fn diagnose(
     }
     let (mut need_fence, mut need_belt) = (f64::INFINITY, f64::INFINITY);
     for seq in seqs {
-        let (mut fence, mut belt) = (0.0f64, 0.0f64);
-        for w in seq.edges.windows(2) {
-            let (e, e2) = (&p.edges[w[0]], &p.edges[w[1]]);
-            let psi = p.rotation_between(w[0], w[1]);
-            let Some((a, b)) = theta_minus_bounds(f.drive.max_angle_rad, psi) else {
-                fence = f64::INFINITY;
-                continue;
-            };
-            // The least radius over a few catch angles: push, separation, drift time and
-            // the landing radius (r' = A r + B, A = cos theta+ / cos theta-).
-            let best = (0..=4)
-                .map(|i| a + (b - a) * f64::from(i) / 4.0)
-                .map(|tm| {
-                    let tp = tm + psi;
-                    let (aa, bb) = (
-                        tp.cos() / tm.cos(),
-                        turn_landing_radius_m(e, e2, 0.0, psi, tm),
-                    );
-                    let r = turn_lower_radius(f, t, w[0], w[1], tm)
-                        .max((t.down(w[1], tm) - bb) / aa.max(1e-9));
-                    let r2 = aa * r + bb;
-                    let fence = (r + e.b_m()).max(r2 + e2.b_m());
-                    let belt = x_range_on_arc(p, w[0], r, 0.0, tp)
-                        .1
-                        .max(x_range_on_arc(p, w[1], r2, tm, 0.0).1);
-                    (fence, belt)
-                })
-                .fold((f64::INFINITY, f64::INFINITY), |acc, v| {
-                    if v.0 < acc.0 {
-                        v
-                    } else {
-                        acc
-                    }
-                });
-            fence = fence.max(best.0);
-            belt = belt.max(best.1);
-        }
-        let g = &p.edges[goal];
-        fence = fence.max(
-            t.up(goal, f.drive.jog_tilt_rad)
-                .min(t.down(goal, -f.drive.jog_tilt_rad))
-                + g.b_m(),
-        );
+        let (fence, belt) = sequence_needs(f, t, seq, goal);
         need_fence = need_fence.min(fence);
         need_belt = need_belt.min(belt);
     }

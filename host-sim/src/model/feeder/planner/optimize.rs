@@ -396,28 +396,8 @@ pub fn solve(
         *cache.borrow_mut() = Some((x.to_vec(), v.clone()));
         v
     };
-    let n_cons = eval(&x0).1.len();
-    let eval_ref = &eval;
-    let cons_fns: Vec<_> = (0..n_cons)
-        .map(|i| move |x: &[f64], _: &mut ()| eval_ref(x).1[i].1)
-        .collect();
-    let cons: Vec<&dyn Func<()>> = cons_fns.iter().map(|c| c as &dyn Func<()>).collect();
-    let unit = vec![(0.0, 1.0); x0.len()];
-    let stop = StopTols {
-        xtol_abs: vec![1e-5; x0.len()],
-        ..StopTols::default()
-    };
-    let result = minimize(
-        |x: &[f64], _: &mut ()| eval(x).0,
-        &x0,
-        &unit,
-        &cons,
-        (),
-        MAX_EVALS,
-        RhoBeg::All(0.1),
-        Some(stop),
-    );
-    let candidates = [result.map(|r| r.1).unwrap_or_else(|e| e.1), x0];
+    let x_opt = cobyla_run(&eval, &x0);
+    let candidates = [x_opt, x0];
     let evals: Vec<(&Vec<f64>, (f64, Cons))> = candidates.iter().map(|x| (x, eval(x))).collect();
     let best = evals
         .iter()
@@ -437,6 +417,33 @@ pub fn solve(
                 |w| format!("{} (by {:.3} part radii)", w.0, -w.1),
             )),
     }
+}
+
+/// COBYLA on the unit box from `x0`, one constraint function per named constraint; the
+/// last iterate (feasible or not).
+fn cobyla_run(eval: &impl Fn(&[f64]) -> (f64, Cons), x0: &[f64]) -> Vec<f64> {
+    let n_cons = eval(x0).1.len();
+    let cons_fns: Vec<_> = (0..n_cons)
+        .map(|i| move |x: &[f64], _: &mut ()| eval(x).1[i].1)
+        .collect();
+    let cons: Vec<&dyn Func<()>> = cons_fns.iter().map(|c| c as &dyn Func<()>).collect();
+    let unit = vec![(0.0, 1.0); x0.len()];
+    let stop = StopTols {
+        xtol_abs: vec![1e-5; x0.len()],
+        ..StopTols::default()
+    };
+    let objective = |x: &[f64], _: &mut ()| eval(x).0;
+    let result = minimize(
+        objective,
+        x0,
+        &unit,
+        &cons,
+        (),
+        MAX_EVALS,
+        RhoBeg::All(0.1),
+        Some(stop),
+    );
+    result.map(|r| r.1).unwrap_or_else(|e| e.1)
 }
 
 /// The most violated constraint.
