@@ -225,6 +225,16 @@ pub fn can_jog(edge: &HullEdge, mu: f64, outward: bool) -> bool {
     mu * edge.h_m < (1.0 - PUSH_MARGIN) * room
 }
 
+/// The jog tilts tried, steepest first: the configured tilt, then 60 % and 30 % of the
+/// way from the friction angle atan mu to it. A gentler tilt slides slower but its
+/// return push (from -tilt back to 0, outward jogs) and tilt push (inward) need smaller
+/// contact radii.
+pub fn jog_tilts(drive: &Drive, mu: f64) -> [f64; 3] {
+    let fa = mu.atan();
+    let t = drive.jog_tilt_rad;
+    [t, fa + 0.6 * (t - fa), fa + 0.3 * (t - fa)]
+}
+
 /// Approximate duration of a jog changing the radius by `dr_m`, s: the planner's
 /// estimate (tilt out and back at the push rate, then slide); 0 for no jog.
 pub fn jog_estimate_s(drive: &Drive, v_b: f64, mu: f64, dr_m: f64) -> f64 {

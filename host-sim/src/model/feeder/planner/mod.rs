@@ -22,7 +22,9 @@ pub mod optimize;
 
 use super::geometry::Pose;
 use super::part::Part;
-use super::primitives::{can_jog, turn_landing_radius_m, turn_min_drift_s, Drive, Primitive};
+use super::primitives::{
+    can_jog, jog_tilts, turn_landing_radius_m, turn_min_drift_s, Drive, Primitive,
+};
 use super::sim::{Schedule, Setup};
 use super::stability::x_range_on_arc;
 use super::FeederError;
@@ -97,7 +99,17 @@ pub fn default_goal_radius(f: &Feeder, t: &RadiusTable, goal: usize) -> f64 {
     let hi_belt = f.setup.belt_edge_m - (x_range_on_arc(&f.part, goal, 0.0, -tilt, tilt).1) - pad;
     let hi = hi_fence.min(hi_belt);
     let mu = f.setup.medium.fence_mu;
-    let (up, down) = (t.up(goal, tilt) + pad, t.down(goal, -tilt) + pad);
+    let tilts = jog_tilts(&f.drive, f.setup.medium.fence_mu);
+    let up = tilts
+        .iter()
+        .map(|&a| t.up(goal, a))
+        .fold(f64::INFINITY, f64::min)
+        + pad;
+    let down = tilts
+        .iter()
+        .map(|&a| t.down(goal, -a))
+        .fold(f64::INFINITY, f64::min)
+        + pad;
     let base = e.a_m + pad;
     let out_ok = can_jog(e, mu, true) && down.max(base) < hi;
     let in_ok = can_jog(e, mu, false) && up.max(base) < hi;

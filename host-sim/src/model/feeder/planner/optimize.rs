@@ -22,7 +22,7 @@
 use super::super::geometry::{Pose, Vec2};
 use super::super::part::Part;
 use super::super::primitives::{
-    can_jog, jog_estimate_s, turn_drift_m, turn_duration_s, turn_landing_radius_m,
+    can_jog, jog_estimate_s, jog_tilts, turn_drift_m, turn_duration_s, turn_landing_radius_m,
     turn_min_drift_s, turn_schedule,
 };
 use super::super::stability::{min_radius_at, x_range_on_arc, ANGLE_GRID_RAD};
@@ -238,11 +238,24 @@ pub fn jog_constraints(
     cons.push(("jog: the edge cannot slide inward without tipping", inward));
     cons.push(("jog: contact beyond the fence", fence_slack(f, p, edge, to)));
     // Inward: the tilt up is a stable push at the starting radius; outward: the return
-    // from -tilt is a stable push at the final radius.
-    let up = d.max((from - t.up(edge, tilt)) / scale - PLAN_MARGIN);
-    cons.push(("jog: radius below the minimum for the inward tilt", up));
-    let down = (-d).max((to - t.down(edge, -tilt)) / scale - PLAN_MARGIN);
-    cons.push(("jog: radius below the minimum for the outward return", down));
+    // from -tilt is a stable push at the final radius (some tilt of [`jog_tilts`]).
+    let tilts = jog_tilts(&f.drive, mu);
+    let up = tilts
+        .iter()
+        .map(|&a| (from - t.up(edge, a)) / scale)
+        .fold(f64::NEG_INFINITY, f64::max);
+    cons.push((
+        "jog: radius below the minimum for the inward tilt",
+        d.max(up - PLAN_MARGIN),
+    ));
+    let down = tilts
+        .iter()
+        .map(|&a| (to - t.down(edge, -a)) / scale)
+        .fold(f64::NEG_INFINITY, f64::max);
+    cons.push((
+        "jog: radius below the minimum for the outward return",
+        (-d).max(down - PLAN_MARGIN),
+    ));
     let belt = if d.abs() > 1e-4 / scale {
         belt_slack(f, edge, from, -tilt, tilt).min(belt_slack(f, edge, to, -tilt, tilt))
     } else {
