@@ -125,7 +125,7 @@ pub fn min_radius_at(
         );
         return if ok { floor } else { f64::INFINITY };
     }
-    let ft = v_b_mps * angle_rad.sin() - omega_radps * edge.h_m;
+    let ft = push_wrench(edge, rho_m, 0.0, angle_rad, omega_radps, v_b_mps).tangential;
     let num = rho_m * rho_m * omega_radps - edge.h_m * ft;
     // F_n must exceed each of these (strictly positive) bounds.
     let fn_friction = if mu > 0.0 {
