@@ -134,7 +134,10 @@ fn minimum_radius_of_the_square_matches_the_hand_bound() {
     let p = square();
     let r = min_contact_radius(&p, 0, 0.0, 0.0, 1.0, 0.01, 0.5);
     assert!((r - (0.02 / 0.45 - 0.01)).abs() < 1e-9, "{r}");
-    assert!(PUSH_MARGIN == 0.1);
+    const _: () = assert!(
+        PUSH_MARGIN == 0.1,
+        "the hand values above assume a 10 % margin"
+    );
     // With mu = 2 the offset bound governs: (0.035235.. - 0.01) = 0.025235.. m.
     let rho2 = p.rho_m * p.rho_m;
     let want = (rho2 + 4e-4) / (0.9 * 0.02) - 0.01;

@@ -81,7 +81,7 @@ impl Part {
             .iter()
             .flat_map(|p| v.iter().map(move |q| (*p - *q).norm()))
             .fold(0.0, f64::max);
-        if !(area > 1e-6 * diam * diam) || !is_simple(&v) {
+        if area.is_nan() || area <= 1e-6 * diam * diam || !is_simple(&v) {
             return bad(
                 "part.vertices_m",
                 "must form a simple polygon with non-zero area",

@@ -171,10 +171,12 @@ fn solve_dense(mut a: Vec<Vec<f64>>) -> Option<Vec<f64>> {
             return None;
         }
         a.swap(col, piv);
-        for r in col + 1..n {
-            let k = a[r][col] / a[col][col];
-            for c in col..=n {
-                a[r][c] -= k * a[col][c];
+        let (top, rest) = a.split_at_mut(col + 1);
+        let pivot_row = &top[col];
+        for row in rest.iter_mut() {
+            let k = row[col] / pivot_row[col];
+            for (x, p) in row.iter_mut().zip(pivot_row.iter()).skip(col) {
+                *x -= k * p;
             }
         }
     }

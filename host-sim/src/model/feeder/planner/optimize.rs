@@ -398,7 +398,8 @@ pub fn solve(
         };
     }
     let x0 = greedy_start(&ctx);
-    let cache: RefCell<Option<(Vec<f64>, (f64, Cons))>> = RefCell::new(None);
+    type Cached = Option<(Vec<f64>, (f64, Cons))>;
+    let cache: RefCell<Cached> = RefCell::new(None);
     let eval = |x: &[f64]| -> (f64, Cons) {
         if let Some((cx, v)) = cache.borrow().as_ref() {
             if cx.as_slice() == x {
