@@ -2,6 +2,7 @@
 //! random arrival poses.
 
 use super::geometry::{Pose, Vec2};
+use super::planner::goal::goal_edge;
 use super::planner::{plan, Feeder, Plan, PlanOptions};
 use super::primitives::Primitive;
 use super::sim::{flush_edge, run, Failure};
@@ -273,6 +274,8 @@ pub struct SweepResult {
     pub fed: usize,
     /// fed / trials.
     pub fraction_fed: f64,
+    /// Arrivals that ended on the goal edge (fed or not: the radius may miss).
+    pub on_goal_edge: usize,
     /// Arrivals for which the planner found no plan, with its reason (first few).
     pub unplanned: usize,
     /// Up to 5 planner errors, for the report.
@@ -318,6 +321,15 @@ pub fn sweep(
         .iter()
         .filter(|o| o.as_ref().is_ok_and(|e| e.reached_goal))
         .count();
+    let goal = goal_edge(&f.part);
+    let on_goal_edge = outcomes
+        .iter()
+        .filter(|o| {
+            o.as_ref().is_ok_and(|e| {
+                e.failure.is_none() && e.final_edge.is_some() && e.final_edge == goal
+            })
+        })
+        .count();
     let errors: Vec<String> = outcomes
         .iter()
         .filter_map(|o| o.as_ref().err().map(|e| e.to_string()))
@@ -339,6 +351,7 @@ pub fn sweep(
         } else {
             0.0
         },
+        on_goal_edge,
         unplanned: errors.len(),
         errors: errors.into_iter().take(5).collect(),
         worst_radius_error_m: worst,
