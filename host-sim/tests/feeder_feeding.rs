@@ -16,7 +16,15 @@
 //! Always on: a few polygons (`cargo test -p dexter-sim --test feeder_feeding`). The full
 //! issue-16 sweep (200 convex and 50 nonconvex parts, 20 arrivals each) is ignored by
 //! default; run it with
-//! `cargo test -p dexter-sim --release --test feeder_feeding -- --ignored --nocapture`.
+//! `cargo test -p dexter-sim --release --test feeder_feeding -- --ignored --nocapture`
+//! (about 32 min on the shared 2-core machine).
+//!
+//! **Known gap**: the last full run failed 78 of 5000 feeds (1.6 %). Every failure it
+//! printed was the planner finding no plan, because our jog (a slide along the tilted
+//! fence, see `primitives`) cannot move the part outward on edges where sliding would
+//! tip it or where the return push needs a radius beyond the fence; no printed failure
+//! was an execution that missed its planned edge or radius. The test keeps the issue's
+//! strict requirement so the gap stays visible.
 
 use dexter_sim::model::feeder::execute::{execute, sweep_arrivals, SweepSpec, FEED_TOL_M};
 use dexter_sim::model::feeder::geometry::Vec2;
@@ -190,7 +198,7 @@ fn random_polygons_are_fed_to_the_goal_edge_and_radius() {
 }
 
 #[test]
-#[ignore = "issue 16's full sweep: 250 parts x 20 arrivals; run in release (see module doc)"]
+#[ignore = "issue 16's full sweep, 250 parts x 20 arrivals, ~32 min in release; known to fail 1.6 % (module doc)"]
 fn feeding_property_full_sweep() {
     let t = feeding_property(1996, 200, 50, 20);
     println!(

@@ -160,7 +160,7 @@ pub fn jog(f: &Feeder, st: &State, target_m: f64) -> Result<Piece, String> {
         }
     };
     let (end, sched) = best;
-    if (end.r_m - target_m).abs() > 10.0 * JOG_TOL_M {
+    if (end.r_m - target_m).abs() > 25.0 * JOG_TOL_M {
         return Err(format!(
             "jog on edge {} missed its radius by {:.2e} m",
             st.edge,
