@@ -4,6 +4,7 @@
 //! system adds its module here (`docs/adding-a-system.md`).
 
 pub mod arm;
+pub mod feeder;
 pub mod hopper;
 pub mod line;
 pub mod planar;
