@@ -12,6 +12,7 @@
 //! | [`sweep`] | sweep ranges and the parallel, order-keeping sweep engine |
 //! | [`output`] | output files written whole or not at all; the CSV number format; JSON |
 //! | [`plot`] | SVG + PNG plots |
+//! | [`filmstrip`] | a motion as a grid of panels in one world window (arm, feeder, tilt table) |
 //! | [`stream`] | constant-memory views of a run: last values, decimated plot points |
 //! | [`progress`] | progress bars (on a terminal only) |
 //! | [`controller`] | [`controller::StepController`]: a plant closes its loop through SIL or HIL alike |
@@ -29,6 +30,7 @@ pub mod controller;
 pub mod effects;
 pub mod engine;
 pub mod external;
+pub mod filmstrip;
 pub mod hil;
 pub mod model;
 pub mod output;
