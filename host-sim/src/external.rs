@@ -36,6 +36,8 @@ pub struct HilRequest {
     pub budget: Option<u32>,
     /// `--corrupt-rate F`, in [0, 1].
     pub corrupt_rate: Option<f64>,
+    /// `--port PATH`: a real board on this serial port instead of QEMU.
+    pub port: Option<PathBuf>,
 }
 
 /// A controller of kind `C` running on a target.
@@ -97,5 +99,6 @@ fn hil_options(req: &HilRequest) -> Result<crate::hil::HilOptions, Failure> {
         }
         opts.corrupt_rate = r;
     }
+    opts.serial = req.port.clone().map(crate::hil::SerialPortOptions::new);
     Ok(opts)
 }

@@ -13,6 +13,7 @@
 //! | [`output`] | output files written whole or not at all; the CSV number format; JSON |
 //! | [`period`] | the period a late orbit has provably settled to |
 //! | [`plot`] | SVG + PNG plots |
+//! | [`filmstrip`] | a motion as a grid of panels in one world window (arm, feeder, tilt table) |
 //! | [`stream`] | constant-memory views of a run: last values, decimated plot points |
 //! | [`progress`] | progress bars (on a terminal only) |
 //! | [`controller`] | [`controller::StepController`]: a plant closes its loop through SIL or HIL alike |
@@ -30,6 +31,7 @@ pub mod controller;
 pub mod effects;
 pub mod engine;
 pub mod external;
+pub mod filmstrip;
 pub mod hil;
 pub mod model;
 pub mod output;

@@ -88,6 +88,9 @@ struct RunArgs {
     /// Fraction of host-to-device bytes corrupted for --hil, in [0, 1].
     #[arg(long, value_name = "F", requires = "hil")]
     corrupt_rate: Option<f64>,
+    /// HIL against a real board on this serial port (e.g. /dev/ttyACM0) instead of QEMU.
+    #[arg(long, value_name = "PATH", requires = "hil", conflicts_with_all = ["firmware", "link"])]
+    port: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -146,6 +149,7 @@ impl RunArgs {
             link: None,
             budget: None,
             corrupt_rate: None,
+            port: None,
         }
     }
 
@@ -158,6 +162,7 @@ impl RunArgs {
             }),
             budget: self.budget,
             corrupt_rate: self.corrupt_rate,
+            port: self.port,
         });
         RunRequest {
             sets: self.set,

@@ -33,11 +33,11 @@ use crate::systems::line::trace::ImpactRow;
 /// Width and height, in pixels, of every plot (the PNG's size and the SVG's view box).
 pub const PLOT_SIZE: (u32, u32) = (1024, 768);
 
-const FONT: &str = "sans-serif";
-const TITLE_SIZE: u32 = 30;
+pub(crate) const FONT: &str = "sans-serif";
+pub(crate) const TITLE_SIZE: u32 = 30;
 const AXIS_DESC_SIZE: u32 = 22;
-const TICK_LABEL_SIZE: u32 = 17;
-const LEGEND_SIZE: u32 = 18;
+pub(crate) const TICK_LABEL_SIZE: u32 = 17;
+pub(crate) const LEGEND_SIZE: u32 = 18;
 
 /// What went wrong while making a plot.
 #[derive(Debug)]
@@ -424,10 +424,11 @@ pub fn bifurcation(
 // ---------------------------------------------------------------------------------------------
 // Figures
 
-type DrawResult<DB> = Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+pub(crate) type DrawResult<DB> =
+    Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
 
 /// Something that can draw itself on any plotters backend (SVG and bitmap).
-trait Figure {
+pub(crate) trait Figure {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB>;
 }
 
@@ -780,7 +781,7 @@ fn backend_error(path: &Path, message: impl fmt::Display) -> PlotError {
 
 /// Draws `fig` into `{dir}/{stem}.svg` and `{dir}/{stem}.png`, each written whole or not at
 /// all ([`crate::output::AtomicFile`]).
-fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
+pub(crate) fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
     if stem.is_empty() || stem.contains(['/', '\\']) || stem == "." || stem == ".." {
         return Err(PlotError::InvalidArgument {
             what: "file stem",

@@ -3,6 +3,8 @@
 //! only the enabled effects (the line juggler: [`crate::systems::line::assemble`]); a new
 //! system adds its module here (`docs/adding-a-system.md`).
 
+pub mod arm;
+pub mod feeder;
 pub mod hopper;
 pub mod line;
 pub mod planar;
