@@ -108,8 +108,8 @@ impl<C: FixedRate> StepController<C> for Sil<C> {
 pub struct SafeSteps {
     /// Control steps whose command was the safe state ([`Mode::Safe`]).
     pub safe_steps: u64,
-    /// Those steps by fault code (`non_finite`, `out_of_range`, `stale`, `link_timeout`);
-    /// only the faults that occurred.
+    /// Those steps by fault code (`non_finite`, `out_of_range`, `stale`, `link_timeout`,
+    /// `overrun`); only the faults that occurred.
     pub faults: BTreeMap<&'static str, u64>,
     /// Control steps in all (not serialized: each summary has its own count).
     #[serde(skip)]
@@ -124,6 +124,7 @@ pub fn fault_name(f: Fault) -> &'static str {
         Fault::OutOfRange => "out_of_range",
         Fault::Stale => "stale",
         Fault::LinkTimeout => "link_timeout",
+        Fault::Overrun => "overrun",
     }
 }
 
