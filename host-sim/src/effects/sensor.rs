@@ -47,6 +47,8 @@ pub struct SampledSensor {
     normal: Option<Normal<f64>>,
     rng: rand::rngs::StdRng,
     next_index: u64,
+    /// `next_index * period_s`, s (kept: the loop asks for it several times per step).
+    next_time_s: f64,
     /// (delivery time, sequence, value)
     pending: VecDeque<(f64, u32, f32)>,
     latest: Option<(u32, f32)>,
@@ -69,6 +71,7 @@ impl SampledSensor {
                 .flatten(),
             rng: rand::rngs::StdRng::seed_from_u64(seed),
             next_index: 0,
+            next_time_s: 0.0,
             pending: VecDeque::new(),
             latest: None,
         }
@@ -87,8 +90,9 @@ impl SampledSensor {
 }
 
 impl Sensor for SampledSensor {
+    #[inline]
     fn next_sample_time_s(&self) -> f64 {
-        self.next_index as f64 * self.period_s
+        self.next_time_s
     }
 
     fn sample(&mut self, t_s: f64, height_m: f64) {
@@ -99,6 +103,7 @@ impl Sensor for SampledSensor {
         }
         self.pending.push_back((t_s + self.latency_s, seq, z));
         self.next_index += 1;
+        self.next_time_s = self.next_index as f64 * self.period_s;
     }
 
     fn frame(&mut self, _step: u64, t_s: f64, _height_m: f64) -> (u32, f32) {

@@ -33,8 +33,18 @@ pub fn eval(c0: f64, c1: f64, c2: f64, t: f64) -> f64 {
 ///   closing there (`c1 < 0`, or `c1 == 0` and `c2 < 0`), else the ball separates and the
 ///   next root, if any, is returned.
 ///
-/// Non-finite coefficients yield `None`.
+/// Non-finite coefficients yield `None`. A gap that provably stays clear of zero over the
+/// window is answered without the roots ([`clearly_apart`]).
+#[inline]
 pub fn first_contact(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
+    if c0 > 0.0 && clearly_apart(c0, c1, c2, h) {
+        return None;
+    }
+    roots_in_window(c0, c1, c2, h)
+}
+
+/// [`first_contact`] by its roots, without the shortcut.
+fn roots_in_window(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
     if !(c0.is_finite() && c1.is_finite() && c2.is_finite() && h.is_finite()) || h < 0.0 {
         return None;
     }
@@ -111,6 +121,28 @@ pub fn first_contact(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
         }
     }
     None
+}
+
+/// How far, relative to the size of the gap's terms over the window, a lower bound of the
+/// gap must stay above zero for [`clearly_apart`] to answer without the roots: 1e-9 is
+/// some 4.5e6 ulps, far beyond the grazing allowance ([`GRAZE_ULPS`]) and the rounding of
+/// the roots, so the shortcut never answers differently from the full computation.
+const CLEAR_GAP: f64 = 1e-9;
+
+/// True if `c0 + c1 t + c2 t^2` (with `c0 > 0`) provably stays above zero on `[0, h]`:
+/// each term at its lowest over the window (`c1 t >= min(0, c1 h)`, `c2 t^2 >=
+/// min(0, c2 h^2)`) still leaves a margin of [`CLEAR_GAP`] times the terms' size. Then
+/// [`first_contact`] returns `None` without a square root or a division: the common case
+/// of a ball well above the paddle over a short segment (a control period). In the full
+/// computation a contact needs the gap within rounding of zero somewhere in `[0, h]`
+/// (a root there, or a minimum within `GRAZE_ULPS` ulps of it), which the margin excludes.
+/// Non-finite input gives false (the full computation handles it).
+#[inline]
+fn clearly_apart(c0: f64, c1: f64, c2: f64, h: f64) -> bool {
+    let linear = c1 * h;
+    let quadratic = c2 * h * h;
+    let lower = c0 + linear.min(0.0) + quadratic.min(0.0);
+    lower > CLEAR_GAP * (c0 + linear.abs() + quadratic.abs())
 }
 
 /// The positive root of `c0 + c1 t + c2 t^2` for `c0 <= 0` tiny, `c1 > 0`, `c2 < 0`.
@@ -232,6 +264,31 @@ mod tests {
                 let before = (0..n).map(|i| c.time_s * i as f64 / n as f64)
                     .map(|t| eval(c0, c1, c2, t)).fold(f64::INFINITY, f64::min);
                 prop_assert!(before >= -64.0 * f64::EPSILON * mag.max(f64::MIN_POSITIVE));
+            }
+        }
+
+        /// The shortcut answers as the roots do: whenever it says "clear", the full
+        /// computation finds no contact either, for gaps built to pass close to zero (a
+        /// double root at `t0` lifted by `lift`, near and beyond the window's end) as well
+        /// as arbitrary ones.
+        #[test]
+        fn the_shortcut_agrees_with_the_roots(
+            t0 in -1.0f64..3.0,
+            a in -50.0f64..50.0,
+            lift_exp in -16i32..1,
+            v in -10.0f64..10.0,
+            scale_exp in -3i32..3,
+            h in 0.0f64..2.0,
+        ) {
+            let s = 10f64.powi(scale_exp);
+            let lift = 10f64.powi(lift_exp);
+            // a (t - t0)^2 + lift, and a gap with an arbitrary slope
+            let tangent = (s * (a * t0 * t0 + lift), -2.0 * a * t0 * s, a * s);
+            let sloped = (s * lift, v * s, a * s);
+            for (c0, c1, c2) in [tangent, sloped] {
+                if c0 > 0.0 && clearly_apart(c0, c1, c2, h) {
+                    prop_assert_eq!(roots_in_window(c0, c1, c2, h), None, "{} {} {} {}", c0, c1, c2, h);
+                }
             }
         }
 

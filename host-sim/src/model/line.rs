@@ -125,7 +125,7 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
             if window <= 0.0 {
                 return Advance::Reached;
             }
-            let to_switch = self.surface.max_segment_s();
+            let to_switch = self.surface.max_segment_s(window);
             let (h, hits_switch) = if to_switch < window {
                 (to_switch, true)
             } else {
