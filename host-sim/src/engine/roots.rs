@@ -33,18 +33,9 @@ pub fn eval(c0: f64, c1: f64, c2: f64, t: f64) -> f64 {
 ///   closing there (`c1 < 0`, or `c1 == 0` and `c2 < 0`), else the ball separates and the
 ///   next root, if any, is returned.
 ///
-/// Non-finite coefficients yield `None`. A gap that provably stays clear of zero over the
-/// window is answered without the roots ([`clearly_apart`]).
-#[inline]
+/// Non-finite coefficients yield `None`. A caller that expects most gaps to stay clear of
+/// zero can ask [`clearly_apart`] first (no square root, no division).
 pub fn first_contact(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
-    if c0 > 0.0 && clearly_apart(c0, c1, c2, h) {
-        return None;
-    }
-    roots_in_window(c0, c1, c2, h)
-}
-
-/// [`first_contact`] by its roots, without the shortcut.
-fn roots_in_window(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
     if !(c0.is_finite() && c1.is_finite() && c2.is_finite() && h.is_finite()) || h < 0.0 {
         return None;
     }
@@ -129,16 +120,19 @@ fn roots_in_window(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
 /// the roots, so the shortcut never answers differently from the full computation.
 const CLEAR_GAP: f64 = 1e-9;
 
-/// True if `c0 + c1 t + c2 t^2` (with `c0 > 0`) provably stays above zero on `[0, h]`:
-/// each term at its lowest over the window (`c1 t >= min(0, c1 h)`, `c2 t^2 >=
-/// min(0, c2 h^2)`) still leaves a margin of [`CLEAR_GAP`] times the terms' size. Then
-/// [`first_contact`] returns `None` without a square root or a division: the common case
-/// of a ball well above the paddle over a short segment (a control period). In the full
-/// computation a contact needs the gap within rounding of zero somewhere in `[0, h]`
-/// (a root there, or a minimum within `GRAZE_ULPS` ulps of it), which the margin excludes.
-/// Non-finite input gives false (the full computation handles it).
+/// True if `c0 + c1 t + c2 t^2` provably stays above zero on `[0, h]`: `c0 > 0` and each
+/// term at its lowest over the window (`c1 t >= min(0, c1 h)`, `c2 t^2 >= min(0, c2 h^2)`)
+/// still leaves a margin of [`CLEAR_GAP`] times the terms' size. Then [`first_contact`]
+/// returns `None`, and a caller may skip it: the common case of a ball well above the
+/// paddle over a short segment (a control period) costs no square root or division.
+/// In [`first_contact`] a contact needs the gap within rounding of zero somewhere in
+/// `[0, h]` (a root there, or a minimum within `GRAZE_ULPS` ulps of it), which the margin
+/// excludes. Non-finite input gives false.
 #[inline]
-fn clearly_apart(c0: f64, c1: f64, c2: f64, h: f64) -> bool {
+pub fn clearly_apart(c0: f64, c1: f64, c2: f64, h: f64) -> bool {
+    if !(c0 > 0.0) {
+        return false;
+    }
     let linear = c1 * h;
     let quadratic = c2 * h * h;
     let lower = c0 + linear.min(0.0) + quadratic.min(0.0);
@@ -286,8 +280,8 @@ mod tests {
             let tangent = (s * (a * t0 * t0 + lift), -2.0 * a * t0 * s, a * s);
             let sloped = (s * lift, v * s, a * s);
             for (c0, c1, c2) in [tangent, sloped] {
-                if c0 > 0.0 && clearly_apart(c0, c1, c2, h) {
-                    prop_assert_eq!(roots_in_window(c0, c1, c2, h), None, "{} {} {} {}", c0, c1, c2, h);
+                if clearly_apart(c0, c1, c2, h) {
+                    prop_assert_eq!(first_contact(c0, c1, c2, h), None, "{} {} {} {}", c0, c1, c2, h);
                 }
             }
         }

@@ -151,7 +151,11 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
                 self.resting = false;
             }
             let poly = self.surface.poly();
-            match self.flight.fly(&mut self.ball, &poly, h, g) {
+            let end = match S::SHORT_SEGMENTS {
+                true => self.flight.fly_short(&mut self.ball, &poly, h, g),
+                false => self.flight.fly(&mut self.ball, &poly, h, g),
+            };
+            match end {
                 FlightEnd::Reached(dt) => {
                     let whole = dt >= h;
                     self.surface.advance(dt, whole && hits_switch);

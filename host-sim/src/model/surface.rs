@@ -26,6 +26,10 @@ pub trait Surface {
     fn command(&mut self, accel_mps2: f64);
     /// True if a ball resting on this surface rests forever (nothing will throw it).
     fn rest_is_final(&self) -> bool;
+    /// True if the plant's segments on this surface are short (a control period) and
+    /// mostly end without a contact: the plant then asks the flight model to rule a
+    /// contact out cheaply first ([`crate::engine::Flight::fly_short`]).
+    const SHORT_SEGMENTS: bool = false;
 }
 
 /// A fixed, horizontal table.
@@ -126,6 +130,8 @@ impl<A: Actuator> Actuated<A> {
 }
 
 impl<A: Actuator> Surface for Actuated<A> {
+    const SHORT_SEGMENTS: bool = true;
+
     #[inline]
     fn poly(&self) -> Poly {
         Poly {

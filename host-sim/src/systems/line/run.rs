@@ -152,7 +152,7 @@ pub(super) struct Recorder<'a> {
 }
 
 impl Recorder<'_> {
-    #[inline]
+    #[inline(always)]
     pub(super) fn push(&mut self, row: &ImpactRow) {
         self.out.apexes.push(row.apex_height_m);
         self.out.last_row = Some(*row);
