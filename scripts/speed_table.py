@@ -34,9 +34,10 @@ PASSIVE = ["scenes/passive-bounce.toml", "--set", "physics.restitution=1.0"]
 MIRROR = ["scenes/line-juggler-ideal.toml"]
 # The realistic scene with controller and sensor at 1 kHz (the shipped one runs at 500 Hz).
 SIL_1KHZ = ["scenes/line-juggler.toml", "--set", "control.rate_hz=1000.0",
-            "--set", "sensor.rate_hz=1000.0"]
+            "--set", "sensor.rate_hz=1000.0", "--set", "stop.impacts=100000000"]
 SWEEP = ["sweep", "scenes/line-juggler-ideal.toml",
-         "--range", "control.kappa1_s2pm2=0.0:0.1:1000", "--set", "stop.impacts=20000"]
+         "--range", "control.kappa1_s2pm2=0.0:0.1:1000", "--set", "stop.impacts=50000",
+         "--set", "stop.duration_s=1e9"]
 
 
 def measure(cmd, env=None):
@@ -59,8 +60,8 @@ def measure(cmd, env=None):
 
 
 def fmt(x):
-    """A rate with 3 significant digits, e.g. 4.52e7."""
-    return f"{x:.2e}".replace("e+0", "e").replace("e+", "e")
+    """A number with 3 significant digits, e.g. 4.52e7 (1e8 for a power of ten)."""
+    return f"{x:.2e}".replace("e+0", "e").replace("e+", "e").replace(".00e", "e")
 
 
 def ratio_table(bin_):
@@ -78,7 +79,7 @@ def ratio_table(bin_):
             wall, _, _, _, out = measure(REFERENCE + [ref, str(n_python)])
             theirs.append(json.loads(out)["sim_time_s"] / wall)
         a, b = statistics.median(ours), statistics.median(theirs)
-        print(f"| {label} | {n_dexter:.0e} | {fmt(a)} | {n_python:.0e} | {fmt(b)} "
+        print(f"| {label} | {fmt(n_dexter)} | {fmt(a)} | {fmt(n_python)} | {fmt(b)} "
               f"| {a / b:.0f} |")
 
 
@@ -89,7 +90,7 @@ def rss_table(bin_):
         wall, _, _, rss, out = measure([bin_, "run"] + PASSIVE +
                                        ["--impacts", str(n), "--json"])
         sim = json.loads(out)["sim_time_s"]
-        print(f"| {n:.0e} | {fmt(sim)} | {wall:.3f} | {fmt(sim / wall)} | {rss} |")
+        print(f"| {fmt(n)} | {fmt(sim)} | {wall:.3f} | {fmt(sim / wall)} | {rss} |")
 
 
 def sil_table(bin_):
@@ -100,8 +101,7 @@ def sil_table(bin_):
         rates = []
         for _ in range(REPEATS):
             wall, _, _, rss, out = measure([bin_, "run"] + SIL_1KHZ +
-                                           ["--duration", str(duration),
-                                            "--impacts", "100000000", "--json"])
+                                           ["--duration", str(duration), "--json"])
             s = json.loads(out)
             rates.append((s["sim_time_s"] / wall, wall))
         rate, wall = sorted(rates)[len(rates) // 2]

@@ -114,6 +114,10 @@ pub fn first_contact(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
     None
 }
 
+/// Where `sqrt(c1 * c1) == c1` holds exactly for `c1 > 0` (the square neither overflows
+/// nor falls below the normal range), m/s.
+const EXACT_SQUARE_MPS: (f64, f64) = (1e-150, 1e150);
+
 /// How far, relative to the size of the gap's terms over the window, a lower bound of the
 /// gap must stay above zero for [`clearly_apart`] to answer without the roots: 1e-9 is
 /// some 4.5e6 ulps, far beyond the grazing allowance ([`GRAZE_ULPS`]) and the rounding of
@@ -141,6 +145,13 @@ pub fn clearly_apart(c0: f64, c1: f64, c2: f64, h: f64) -> bool {
 
 /// The positive root of `c0 + c1 t + c2 t^2` for `c0 <= 0` tiny, `c1 > 0`, `c2 < 0`.
 fn second_root_from_touch(c0: f64, c1: f64, c2: f64) -> f64 {
+    if c0 == 0.0 && (EXACT_SQUARE_MPS.0..EXACT_SQUARE_MPS.1).contains(&c1) {
+        // a take-off from the surface (every bounce on a table or the ideal mirror): the
+        // discriminant is c1^2, whose correctly rounded square root is c1 itself in binary
+        // floating point (no overflow or underflow), so q = -c1 exactly and the square root,
+        // the longest step of the impact-to-impact chain, is not needed
+        return -c1 / c2;
+    }
     let disc = (c1 * c1 - 4.0 * c0 * c2).max(0.0);
     let q = -0.5 * (c1 + disc.sqrt());
     // roots q/c2 (the far one, positive) and c0/q (the near one, ~0)
@@ -284,6 +295,22 @@ mod tests {
                     prop_assert_eq!(first_contact(c0, c1, c2, h), None, "{} {} {} {}", c0, c1, c2, h);
                 }
             }
+        }
+
+        /// A take-off from the surface (c0 = 0) is answered without the square root, bit
+        /// for bit as with it (the square root of c1^2 is c1 exactly).
+        #[test]
+        fn take_off_roots_match_the_square_root(
+            mantissa in 1.0f64..2.0,
+            exp in -520i32..520,
+            a in 1e-3f64..1e3,
+            negative_zero in proptest::bool::ANY,
+        ) {
+            let c1 = mantissa * 2f64.powi(exp);
+            let c0 = if negative_zero { -0.0 } else { 0.0 };
+            let c2 = -a;
+            let q = -0.5 * (c1 + (c1 * c1 - 4.0 * c0 * c2).max(0.0).sqrt());
+            prop_assert_eq!(second_root_from_touch(c0, c1, c2).to_bits(), (q / c2).to_bits());
         }
 
         /// Tangent gaps (exact double roots, built from the root) are never missed.

@@ -44,6 +44,7 @@ fn finish<F: Flight, S: Surface, J: Jitter>(
     out.resting_at_end = plant.resting;
     out.grazing_contacts = plant.grazing_contacts;
     out.final_ball = plant.ball;
+    out.last_row = (plant.impacts > 0).then_some(plant.last_row);
 }
 
 /// Impact-to-impact run without a controller (table, ideal mirror): to the impact limit,
