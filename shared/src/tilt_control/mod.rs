@@ -48,7 +48,7 @@
 //! # Trig and the step budget (Cortex-M4F)
 //!
 //! The sine/cosine source is a type parameter ([`sincos::SinCos`]); the shipped controller
-//! is `TiltController` = `TiltController<PolySinCos>` ([`crate::math::sin_cos_poly_f32`],
+//! is [`TiltController`] = [`TiltControllerWith`]`<PolySinCos>` ([`crate::math::sin_cos_poly_f32`],
 //! one range reduction, ~55 instructions a call with its moves). libm's `sinf` costs ~1350
 //! instructions a call on the M4F and is only there to measure what accuracy costs.
 //!
@@ -601,10 +601,13 @@ impl Pipeline {
     }
 }
 
-/// The kappa-tilt controller, stepped at a fixed rate; `T` is the sine/cosine source
-/// (module docs: the default [`PolySinCos`] is what ships).
+/// The kappa-tilt controller that ships: sine and cosine from [`PolySinCos`].
+pub type TiltController = TiltControllerWith<PolySinCos>;
+
+/// The kappa-tilt controller, stepped at a fixed rate, with the sine/cosine source `T`
+/// (module docs; [`TiltController`] is the one that ships).
 #[derive(Clone, Debug)]
-pub struct TiltController<T: SinCos = PolySinCos> {
+pub struct TiltControllerWith<T: SinCos> {
     params: TiltParams,
     law: LawConstants,
     geo: ContactGeometry,
@@ -625,7 +628,7 @@ pub struct TiltController<T: SinCos = PolySinCos> {
     _sin_cos: PhantomData<T>,
 }
 
-impl<T: SinCos> TiltController<T> {
+impl<T: SinCos> TiltControllerWith<T> {
     /// A controller; the error names the first invalid parameter.
     pub fn new(params: TiltParams) -> Result<Self, ParamError> {
         params.validate()?;
@@ -1081,28 +1084,28 @@ impl<T: SinCos> TiltController<T> {
     }
 }
 
-impl<T: SinCos> FixedRate for TiltController<T> {
+impl<T: SinCos> FixedRate for TiltControllerWith<T> {
     type Params = TiltParams;
     type Frame = TiltFrame;
     type Command = TiltCommand;
 
     fn new(params: TiltParams) -> Result<Self, ParamError> {
-        TiltController::new(params)
+        TiltControllerWith::new(params)
     }
 
     fn params(&self) -> &TiltParams {
-        TiltController::params(self)
+        TiltControllerWith::params(self)
     }
 
     fn step(&mut self, frame: &TiltFrame) -> TiltCommand {
-        TiltController::step(self, frame)
+        TiltControllerWith::step(self, frame)
     }
 
     fn safe(&mut self, seq: u32, fault: Fault) -> TiltCommand {
-        TiltController::safe(self, seq, fault)
+        TiltControllerWith::safe(self, seq, fault)
     }
 
     fn telemetry(&self) -> Telemetry {
-        TiltController::telemetry(self)
+        TiltControllerWith::telemetry(self)
     }
 }

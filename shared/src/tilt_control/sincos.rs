@@ -1,7 +1,7 @@
 //! Where the tilt controller's sine and cosine come from, chosen at compile time.
 //!
-//! The controller is generic over [`SinCos`]; the type the firmware ships is
-//! [`super::TiltController`] with its default, [`PolySinCos`]. The others exist to measure
+//! The controller is generic over [`SinCos`] ([`super::TiltControllerWith`]); the type the
+//! firmware ships is [`super::TiltController`], with [`PolySinCos`]. The others exist to measure
 //! what accuracy costs (BENCHMARKS.md): on the Cortex-M4F a libm `sinf` costs ~1350
 //! instructions (its range reduction runs in software f64), so [`BackendSinCos`] under the
 //! default `libm` backend cannot meet the step budget; under `fast-math` it is micromath's
