@@ -36,7 +36,7 @@
 //! ([`TiltParams::cycle_periods`]) from an estimate that old (the apply stage moves the
 //! predicted time to the period it takes effect in), and between plans the axes follow the
 //! cubics' accelerations. In the period in which the estimator applies an impact no stage
-//! runs, and the next plan starts from the table as measured.
+//! runs; the next plan starts from the references where they are.
 //!
 //! # Modes
 //!
@@ -784,14 +784,8 @@ impl<T: SinCos> TiltControllerWith<T> {
             }
             self.mode = Mode::Track;
             if update.impact || update.restarted {
-                // the impact model ran (or the fit restarted) this period: no stage; plan
-                // the next flight from the table as measured (the stroke coordinate's rate
-                // jumped by tan(alpha) dx' at the impact: see `plan`)
+                // the impact model ran (or the fit restarted) this period: no stage
                 self.pipeline.restart();
-                self.tilt.p = tilt_m.height_m;
-                self.tilt.v = tilt_m.velocity_mps;
-                self.stroke.p = stroke_m.height_m;
-                self.stroke.v = stroke_m.velocity_mps;
             } else {
                 self.run_stage();
             }
