@@ -1,5 +1,5 @@
 //! The planar body on a real table: tilt and stroke drives with limits, a camera, and the
-//! core's fixed-rate [`TiltController`] closing the loop through a [`StepController`] (SIL
+//! core's fixed-rate [`TiltController`](dexter_core::tilt_control::TiltController) closing the loop through a [`StepController`] (SIL
 //! now, the firmware in QEMU for HIL), with events exact between control steps.
 //!
 //! # The table
@@ -59,7 +59,10 @@ use crate::controller::{ControllerError, StepController};
 use crate::effects::actuator::{Actuator, IdealActuator, SecondOrderActuator};
 use dexter_core::protocol::{Fault, Mode};
 use dexter_core::state::PaddleState;
-use dexter_core::tilt_control::{PlanStatus, TiltCommand, TiltController, TiltFrame, TiltParams};
+use dexter_core::tilt_control::sincos::SinCos;
+use dexter_core::tilt_control::{
+    PlanStatus, TiltCommand, TiltControllerWith, TiltFrame, TiltParams,
+};
 use serde::{Deserialize, Serialize};
 
 /// Most plant segments in one control period (each ends at a drive switch, a camera
@@ -236,14 +239,16 @@ pub struct TableRunConfig {
     pub record: Vec<(f64, f64)>,
 }
 
-/// Run the real table with the controller `ctrl` (configured with `table.controller`);
-/// the effects switched off in `table` cost nothing (the loop is compiled per combination).
-/// `Err` only if the controller fails (a link error in HIL); everything the plant does ends
-/// the run with a [`TableRunEnd`].
-pub fn run_real_table(
+/// Run the real table with the controller `ctrl` (configured with `table.controller`; any
+/// sine/cosine source `T`, the shipped [`TiltController`](dexter_core::tilt_control::TiltController)
+/// in SIL and HIL); the effects
+/// switched off in `table` cost nothing (the loop is compiled per combination). `Err` only
+/// if the controller fails (a link error in HIL); everything the plant does ends the run
+/// with a [`TableRunEnd`].
+pub fn run_real_table<T: SinCos>(
     cfg: &TableRunConfig,
     table: &RealTable,
-    ctrl: &mut dyn StepController<TiltController>,
+    ctrl: &mut dyn StepController<TiltControllerWith<T>>,
 ) -> Result<TableRun, ControllerError> {
     match table.camera {
         None => with_tilt(cfg, table, ctrl, PerfectCamera),
@@ -251,10 +256,10 @@ pub fn run_real_table(
     }
 }
 
-fn with_tilt<C: Camera>(
+fn with_tilt<T: SinCos, C: Camera>(
     cfg: &TableRunConfig,
     table: &RealTable,
-    ctrl: &mut dyn StepController<TiltController>,
+    ctrl: &mut dyn StepController<TiltControllerWith<T>>,
     camera: C,
 ) -> Result<TableRun, ControllerError> {
     match table.tilt {
@@ -263,10 +268,10 @@ fn with_tilt<C: Camera>(
     }
 }
 
-fn with_stroke<C: Camera, A: Actuator>(
+fn with_stroke<T: SinCos, C: Camera, A: Actuator>(
     cfg: &TableRunConfig,
     table: &RealTable,
-    ctrl: &mut dyn StepController<TiltController>,
+    ctrl: &mut dyn StepController<TiltControllerWith<T>>,
     camera: C,
     tilt: A,
 ) -> Result<TableRun, ControllerError> {
@@ -543,9 +548,9 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
         }
     }
 
-    fn run(
+    fn run<T: SinCos>(
         mut self,
-        ctrl: &mut dyn StepController<TiltController>,
+        ctrl: &mut dyn StepController<TiltControllerWith<T>>,
     ) -> Result<TableRun, ControllerError> {
         let dt = f64::from(self.table.controller.dt_s);
         let max_steps = (self.table.max_duration_s / dt).ceil() as u64;
