@@ -30,8 +30,9 @@
 //! # Each axis between impacts
 //!
 //! The cubic (Hermite) p(t) from the reference's position and velocity now to the target
-//! position and velocity at the predicted time tau; re-solved every control period while the
-//! impact is further than the commit time, then frozen. Its acceleration is linear in t, so
+//! position and velocity at the predicted time tau; re-solved at every plan (one pipeline
+//! cycle of the controller) while the impact is further than the commit time, then
+//! frozen. Its acceleration is linear in t, so
 //! its largest magnitude is at an end; its velocity is a quadratic (extreme at the vertex)
 //! and its position a cubic (extremes where the velocity is zero, closed form):
 //! [`Cubic::within`] checks all three against the axis's limits in constant work. The
