@@ -22,6 +22,7 @@
 //! | [`fixed_rate`] | the one shape of every controller: [`FixedRate`](fixed_rate::FixedRate) and [`Reply`](fixed_rate::Reply) | — |
 //! | [`control`] | the fixed-rate line-juggler [`Controller`](control::Controller) and its safe state | — |
 //! | [`echo`] | the link check [`Echo`](echo::Echo): a controller with no plant, for links and HIL tests | — |
+//! | [`tilt_control`] | the fixed-rate kappa-tilt [`TiltController`](tilt_control::TiltController): camera flight estimate, eq. 7 contact, eq. 25 table velocity, table tracking | Zumel & Erdmann eq. 2, 7, 21, 25 |
 //! | [`protocol`] | wire types of every controller kind ([`Wire`](protocol::Wire)), postcard + CRC + COBS framing, typed decode errors | — |
 #![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
@@ -40,6 +41,7 @@ pub mod planar;
 pub mod protocol;
 pub mod state;
 pub mod tilt;
+pub mod tilt_control;
 pub mod track;
 
 /// Standard gravity, m/s^2 (the default for scenes and controllers).

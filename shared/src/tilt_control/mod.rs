@@ -1,0 +1,1105 @@
+//! The fixed-rate kappa-tilt controller with energy feedback (Zumel & Erdmann, "Balancing of
+//! a Planar Bouncing Object", sec. 2): camera poses in, table tilt and stroke accelerations
+//! out, or the safe state with a fault code.
+//!
+//! One [`TiltController::step`] per control period `dt_s` takes a [`TiltFrame`] (the body's
+//! pose from a camera, the table's measured angle, height and their rates) and returns a
+//! [`TiltCommand`]. It implements [`FixedRate`], so the simulator's SIL loop, the HIL driver
+//! and the firmware server step it exactly as they step the line juggler.
+//!
+//! # Pipeline
+//!
+//! 1. **Validate** the frame: non-finite values, values outside their plausible ranges, or a
+//!    sequence number that has not advanced for more than `stale_limit_steps` periods give
+//!    the safe state (as [`crate::control`]).
+//! 2. **Estimate** the body's flight ([`flight`]): a recursive least-squares fit of the exact
+//!    flight (parabola in x, y, theta linear in t), latency compensated, re-initialised at
+//!    each planned impact by eq. 2/21 and restarted from the measurements when they disagree.
+//! 3. **Predict** the next contact ([`contact`]): eq. 7 against the planned table (its line
+//!    passes through the contact point at the impact height), `contact_iterations`
+//!    safeguarded Newton steps warm-started from the previous plan's root.
+//! 4. **Target** ([`plan`]): alpha = kappa theta (sec. 2.1, [`crate::tilt::TiltLaw`]; plus
+//!    the optional tilt-rate term of [`TiltParams::kappa_rate_s`]) and the table velocity of
+//!    eq. 25 ([`crate::tilt::EnergyFeedback`]) along the table normal, at the predicted
+//!    impact, through the table's geometry to a pivot height and velocity.
+//! 5. **Plan and track** each axis ([`axis`]): a cubic from the reference to the target at
+//!    the predicted time, re-planned while the impact is further than `commit_s`, then
+//!    frozen and checked against the limits; PD plus feed-forward within the axis's limits
+//!    (the paddle tracker's law, [`crate::track::Tracker`]). When a target or the profile
+//!    exceeds an axis's limits, or the tracker saturates, the command says so
+//!    ([`PlanStatus::Limited`]); it is never silent.
+//!
+//! Steps 3 to 5 form a **pipeline that does one stage per control period** (module
+//! `Stage`): snapshot the estimate, bracket the contact, (start, without a warm start), N
+//! Newton steps, the angle at impact, the law, the table's motion, apply; after a commit,
+//! four limit checks. A plan is therefore re-made every N + 6 or N + 7 periods
+//! ([`TiltParams::cycle_periods`]) from an estimate that old (the apply stage moves the
+//! predicted time to the period it takes effect in), and between plans the axes follow the
+//! cubics' accelerations. In the period in which the estimator applies an impact no stage
+//! runs; the next plan starts from the references where they are.
+//!
+//! # Modes
+//!
+//! [`Mode::Hold`]: no valid estimate yet; both axes go to their home positions.
+//! [`Mode::Track`]: following the plan ([`PlanStatus`] says how). [`Mode::Safe`]: a fault;
+//! both axes brake to rest where they are (their last measured state dead-reckoned), the
+//! estimator is reset; the next valid frames restart from `Hold`.
+//!
+//! # Trig and the step budget (Cortex-M4F)
+//!
+//! The sine/cosine source is a type parameter ([`sincos::SinCos`]); the shipped controller
+//! is [`TiltController`] = [`TiltControllerWith`]`<PolySinCos>` ([`crate::math::sin_cos_poly_f32`],
+//! one range reduction, ~55 instructions a call with its moves). libm's `sinf` costs ~1350
+//! instructions a call on the M4F and is only there to measure what accuracy costs.
+//!
+//! The work of one period is bounded by constants, whatever the parameters: there is no
+//! loop over data (two fixed two-element loops over the axes, one fixed seven-element scan
+//! on the fault path), no recursion, and the pipeline runs **at most one stage per
+//! period**; `contact_iterations` (<= [`contact::MAX_CONTACT_ITERATIONS`]) changes only how
+//! many periods a plan takes, never the work of one. Per period (S = sine/cosine pairs,
+//! R = square roots, D = divisions):
+//!
+//! | part | S | R | D | runs |
+//! | --- | --- | --- | --- | --- |
+//! | validate (ten comparisons) | 0 | 0 | 0 | every period |
+//! | estimator update, fresh sample (two divisions for the gains) | 0 | 0 | 2 | fresh periods |
+//! | estimator impact (eq. 2/21; sin, cos from the plan's, rotated) instead of the update | 0 | 1 | 2 | impact periods |
+//! | feed-forward, two axis commands (one stopping-distance `sqrt` each), two reference advances | 0 | 2 | 2 | Hold and Track |
+//! | safe state (two brakes) instead of all the above | 0 | 0 | 2 | faults |
+//! | stage: snapshot / bracket / start | 0 | 0 / 2 / 2 | 0 | one stage per |
+//! | stage: Newton step / angle / law | 1 | 0 | 1 / 0 / 0 | Track period, |
+//! | stage: motion / apply | 0 | 0 | 1 | none in an |
+//! | stage: check dynamics / check travel (per axis) | 0 | 0 / 1 | 1 / 2 | impact period |
+//!
+//! The worst period is a fresh sample plus the costliest stage (a Newton step, the law, or a
+//! travel check); the impact period carries no stage. Measured with a throwaway QEMU build
+//! (mps2-an386, `-icount`, the `PolySinCos` controller, N = 1..4, a closed loop on the
+//! target): at most 568 instructions per period (Hold at most 410, impact periods at most
+//! 460); BENCHMARKS.md gets the figures of the firmware build at integration.
+
+pub mod axis;
+pub mod contact;
+pub mod flight;
+pub mod plan;
+pub mod sincos;
+
+use crate::fixed_rate::{FixedRate, Reply};
+use crate::math::Real;
+use crate::params::{finite, non_negative, positive, within, ParamError};
+use crate::protocol::{Fault, Mode, Telemetry};
+use crate::state::PaddleState;
+use crate::tilt::{EnergyFeedback, TiltLaw};
+use axis::Axis;
+use contact::{
+    ContactGeometry, ContactInput, ContactPrediction, ContactSolver, MAX_CONTACT_ITERATIONS,
+};
+use core::marker::PhantomData;
+use flight::{BodyFlight, FlightEstimator, FlightTuning, ImpactModel, PlannedImpact};
+use plan::{
+    table_angle, table_motion, AxisLimits, BodyAtImpact, Cubic, ImpactTarget, LawConstants,
+    TableAngle,
+};
+use serde::{Deserialize, Serialize};
+use sincos::{PolySinCos, SinCos};
+
+/// Largest |tilt| travel the validator accepts, rad (cos alpha >= 0.36: the pivot height
+/// and velocity targets divide by it).
+pub const MAX_TILT_TRAVEL_RAD: f32 = 1.2;
+
+/// The tilt axis: limits, tracking gains and home, rad.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TiltAxisParams {
+    /// Lowest table angle, rad (>= -1.2).
+    pub min_rad: f32,
+    /// Highest table angle, rad (> min, <= 1.2).
+    pub max_rad: f32,
+    /// Largest tilt rate, rad/s (> 0).
+    pub rate_max_radps: f32,
+    /// Largest tilt acceleration, rad/s^2 (> 0).
+    pub accel_max_radps2: f32,
+    /// Tracking stiffness, 1/s^2 (>= 0).
+    pub kp_per_s2: f32,
+    /// Tracking damping, 1/s (>= 0).
+    pub kd_per_s: f32,
+    /// Angle held while there is no valid estimate, rad (within the travel).
+    pub home_rad: f32,
+}
+
+/// The vertical stroke: limits, tracking gains and home, m.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StrokeAxisParams {
+    /// Lowest pivot height, m.
+    pub min_m: f32,
+    /// Highest pivot height, m (> min).
+    pub max_m: f32,
+    /// Largest stroke speed, m/s (> 0).
+    pub velocity_max_mps: f32,
+    /// Largest stroke acceleration, m/s^2 (> 0).
+    pub accel_max_mps2: f32,
+    /// Tracking stiffness, 1/s^2 (>= 0).
+    pub kp_per_s2: f32,
+    /// Tracking damping, 1/s (>= 0).
+    pub kd_per_s: f32,
+    /// Pivot height held while there is no valid estimate, m (within the travel).
+    pub home_m: f32,
+}
+
+/// Everything a tilt controller needs, SI units, f32 (sent over the wire in HIL; about 135
+/// bytes postcard-encoded).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TiltParams {
+    /// Control period, s (> 0, <= 0.02).
+    pub dt_s: f32,
+    /// G in the plane of motion, m/s^2 (> 0).
+    pub gravity_mps2: f32,
+    /// Radius of gyration rho, m (> 0).
+    pub rho_m: f32,
+    /// Contact distance l from the centre of mass, m (> 0).
+    pub l_m: f32,
+    /// Restitution e, in [0, 1] (eq. 21).
+    pub restitution: f32,
+    /// kappa of alpha = kappa theta (>= 0).
+    pub kappa: f32,
+    /// kappa_E of eq. 25, s^2/m^2 (>= 0).
+    pub kappa_e_s2pm2: f32,
+    /// kappa_w of an added tilt-rate term, alpha = kappa theta + kappa_w theta' at the
+    /// impact, s, in [0, 0.1]. **0 is the paper's law** (sec. 2.1), whose tilt mode is only
+    /// neutrally stable (eq. 11: eigenvalues on the unit circle for 1 < kappa < kappa_crit):
+    /// independent errors in alpha random-walk its amplitude, and on the sec. 2.3 triangle
+    /// errors of 1e-3 rad rms (what a camera with 5 mrad noise gives at 500 Hz) tip the body
+    /// within tens of impacts. A small kappa_w > 0 adds damping (the tilt oscillation turns
+    /// by about 72 degrees per impact, so a term in theta' acts as a phase lead); measured
+    /// in `host-sim/tests/planar_real_table.rs`. Not in the paper.
+    pub kappa_rate_s: f32,
+    /// Apex of the centre of mass above the impact height, m (> l): eta* = G apex.
+    pub target_apex_m: f32,
+    /// Height of the contact point at every planned impact, m (within the stroke travel).
+    pub impact_height_m: f32,
+    /// The tilt axis.
+    pub tilt: TiltAxisParams,
+    /// The vertical stroke.
+    pub stroke: StrokeAxisParams,
+    /// The flight estimator.
+    pub estimator: FlightTuning,
+    /// The plan is frozen this long before the predicted impact, s (<= 0.2; more than the
+    /// latency plus one planning cycle, [`TiltParams::cycle_periods`], plus one period).
+    pub commit_s: f32,
+    /// Plausible |x| of the centre of mass, m (> 0): beyond it a pose is out of range. The
+    /// law does not hold x (its x' eigenvalue is 1: the body wanders, metres over hundreds
+    /// of impacts with noise), so this is a sanity bound, 1000 m by default.
+    pub x_max_m: f32,
+    /// Plausible lowest y of the centre of mass, m.
+    pub y_min_m: f32,
+    /// Plausible highest y of the centre of mass, m (> y_min).
+    pub y_max_m: f32,
+    /// Plausible |theta|, rad, in (0, pi/2].
+    pub theta_max_rad: f32,
+    /// Safeguarded Newton steps per period for the contact time, 1 ..= 4.
+    pub contact_iterations: u8,
+    /// Periods without a new camera sample before the input counts as stale (>= 1).
+    pub stale_limit_steps: u16,
+}
+
+impl Default for TiltParams {
+    /// The triangle of sec. 2.3 (rho 9.428 cm, l = 2/3 of 20 cm, e 0.5, kappa 1.1,
+    /// kappa_E 0.165, 25 cm apex) at 500 Hz, a camera with 4 ms latency, and a table with
+    /// +-0.7 rad, 8 rad/s, 300 rad/s^2 of tilt and +-10 cm, 2 m/s, 60 m/s^2 of stroke.
+    fn default() -> Self {
+        Self {
+            dt_s: 0.002,
+            gravity_mps2: 9.81,
+            rho_m: 0.094_28,
+            l_m: 0.2 * 2.0 / 3.0,
+            restitution: 0.5,
+            kappa: 1.1,
+            kappa_e_s2pm2: 0.165,
+            kappa_rate_s: 0.0,
+            target_apex_m: 0.25,
+            impact_height_m: 0.0,
+            tilt: TiltAxisParams {
+                min_rad: -0.7,
+                max_rad: 0.7,
+                rate_max_radps: 8.0,
+                accel_max_radps2: 300.0,
+                kp_per_s2: 2500.0,
+                kd_per_s: 100.0,
+                home_rad: 0.0,
+            },
+            stroke: StrokeAxisParams {
+                min_m: -0.1,
+                max_m: 0.1,
+                velocity_max_mps: 2.0,
+                accel_max_mps2: 60.0,
+                kp_per_s2: 2500.0,
+                kd_per_s: 100.0,
+                home_m: 0.0,
+            },
+            estimator: FlightTuning {
+                latency_s: 0.004,
+                ..FlightTuning::default()
+            },
+            commit_s: 0.03,
+            x_max_m: 1000.0,
+            y_min_m: -0.5,
+            y_max_m: 5.0,
+            theta_max_rad: 1.4,
+            contact_iterations: 2,
+            stale_limit_steps: 5,
+        }
+    }
+}
+
+impl TiltAxisParams {
+    fn limits(&self) -> AxisLimits {
+        AxisLimits {
+            min: self.min_rad,
+            max: self.max_rad,
+            velocity_max: self.rate_max_radps,
+            accel_max: self.accel_max_radps2,
+        }
+    }
+
+    fn validate(&self) -> Result<(), ParamError> {
+        within(
+            "tilt.min_rad",
+            self.min_rad,
+            -MAX_TILT_TRAVEL_RAD,
+            MAX_TILT_TRAVEL_RAD,
+        )?;
+        within(
+            "tilt.max_rad",
+            self.max_rad,
+            -MAX_TILT_TRAVEL_RAD,
+            MAX_TILT_TRAVEL_RAD,
+        )?;
+        if self.max_rad <= self.min_rad {
+            return Err(ParamError::OutOfRange("tilt.max_rad"));
+        }
+        positive("tilt.rate_max_radps", self.rate_max_radps)?;
+        positive("tilt.accel_max_radps2", self.accel_max_radps2)?;
+        non_negative("tilt.kp_per_s2", self.kp_per_s2)?;
+        non_negative("tilt.kd_per_s", self.kd_per_s)?;
+        within("tilt.home_rad", self.home_rad, self.min_rad, self.max_rad)?;
+        Ok(())
+    }
+}
+
+impl StrokeAxisParams {
+    fn limits(&self) -> AxisLimits {
+        AxisLimits {
+            min: self.min_m,
+            max: self.max_m,
+            velocity_max: self.velocity_max_mps,
+            accel_max: self.accel_max_mps2,
+        }
+    }
+
+    fn validate(&self) -> Result<(), ParamError> {
+        finite("stroke.min_m", self.min_m)?;
+        finite("stroke.max_m", self.max_m)?;
+        if self.max_m <= self.min_m {
+            return Err(ParamError::OutOfRange("stroke.max_m"));
+        }
+        positive("stroke.velocity_max_mps", self.velocity_max_mps)?;
+        positive("stroke.accel_max_mps2", self.accel_max_mps2)?;
+        non_negative("stroke.kp_per_s2", self.kp_per_s2)?;
+        non_negative("stroke.kd_per_s", self.kd_per_s)?;
+        within("stroke.home_m", self.home_m, self.min_m, self.max_m)?;
+        Ok(())
+    }
+}
+
+impl TiltParams {
+    /// Most control periods from one plan to the next while re-planning: snapshot,
+    /// bracket, start (without a warm start), `contact_iterations` Newton steps, angle, law,
+    /// motion, apply.
+    pub fn cycle_periods(&self) -> u16 {
+        u16::from(self.contact_iterations) + 7
+    }
+
+    /// Check every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        within("dt_s", self.dt_s, f32::MIN_POSITIVE, 0.02)?;
+        positive("gravity_mps2", self.gravity_mps2)?;
+        positive("rho_m", self.rho_m)?;
+        positive("l_m", self.l_m)?;
+        within("restitution", self.restitution, 0.0, 1.0)?;
+        TiltLaw::new(self.kappa)?;
+        non_negative("kappa_e_s2pm2", self.kappa_e_s2pm2)?;
+        within("kappa_rate_s", self.kappa_rate_s, 0.0, 0.1)?;
+        positive("target_apex_m", self.target_apex_m)?;
+        if self.target_apex_m <= self.l_m {
+            return Err(ParamError::OutOfRange("target_apex_m"));
+        }
+        self.tilt.validate()?;
+        self.stroke.validate()?;
+        within(
+            "impact_height_m",
+            self.impact_height_m,
+            self.stroke.min_m,
+            self.stroke.max_m,
+        )?;
+        self.estimator.validate()?;
+        within("commit_s", self.commit_s, 0.0, 0.2)?;
+        if self.contact_iterations == 0 || self.contact_iterations > MAX_CONTACT_ITERATIONS {
+            return Err(ParamError::OutOfRange("contact_iterations"));
+        }
+        // a plan is applied every cycle_periods(); the commit must come before the impact
+        // is due in the estimator (one latency after it)
+        let cycle_s = f32::from(self.cycle_periods()) * self.dt_s;
+        if self.commit_s <= self.estimator.latency_s + cycle_s + self.dt_s {
+            return Err(ParamError::OutOfRange("commit_s"));
+        }
+        positive("x_max_m", self.x_max_m)?;
+        finite("y_min_m", self.y_min_m)?;
+        finite("y_max_m", self.y_max_m)?;
+        if self.y_max_m <= self.y_min_m {
+            return Err(ParamError::OutOfRange("y_max_m"));
+        }
+        within(
+            "theta_max_rad",
+            self.theta_max_rad,
+            f32::MIN_POSITIVE,
+            core::f32::consts::FRAC_PI_2,
+        )?;
+        if self.stale_limit_steps == 0 {
+            return Err(ParamError::NotPositive("stale_limit_steps"));
+        }
+        Ok(())
+    }
+}
+
+/// One sample of the plant: the camera's newest pose of the body and the table's encoders.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TiltFrame {
+    /// Sequence number of the camera sample; a controller that sees it not advance counts
+    /// the input stale.
+    pub seq: u32,
+    /// Centre of mass x, m (NaN if the camera lost the body).
+    pub body_x_m: f32,
+    /// Centre of mass y, m.
+    pub body_y_m: f32,
+    /// Body angle theta, rad (counterclockwise, 0 = upright).
+    pub body_theta_rad: f32,
+    /// Table angle alpha, rad.
+    pub table_angle_rad: f32,
+    /// Table tilt rate, rad/s (the tilt drive's velocity estimate).
+    pub table_rate_radps: f32,
+    /// Pivot height h, m.
+    pub table_height_m: f32,
+    /// Pivot vertical velocity, m/s (the stroke drive's velocity estimate).
+    pub table_velocity_mps: f32,
+}
+
+/// How the table's plan stands (a command field: every limitation is reported).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum PlanStatus {
+    /// No plan: no valid estimate, the safe state, or the period right after an impact.
+    #[default]
+    Idle = 0,
+    /// Tracking a plan to the predicted impact, within every limit.
+    Planned = 1,
+    /// The plan is frozen (within `commit_s` of the impact), within every limit.
+    Committed = 2,
+    /// The plan needs more than an axis can do: a target clamped into its travel or speed,
+    /// a profile beyond its acceleration, speed or travel, or the tracker saturated. The
+    /// command stays within the limits; the table will not arrive as planned.
+    Limited = 3,
+    /// No descending contact ahead: the contact point is already below the impact height.
+    /// The axes' references brake to rest.
+    Unreachable = 4,
+    /// The body spins so fast that the predicted contact is not provably its first
+    /// ([`contact`]); the plan follows it anyway.
+    Ambiguous = 5,
+}
+
+/// The controller's output for one control period (zero-order hold).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TiltCommand {
+    /// Sequence number of the frame this command answers.
+    pub seq: u32,
+    /// Commanded tilt acceleration, rad/s^2, within the tilt limit.
+    pub tilt_accel_radps2: f32,
+    /// Commanded stroke acceleration, m/s^2, within the stroke limit.
+    pub stroke_accel_mps2: f32,
+    /// Tilt reference the command tracks, rad (informational).
+    pub tilt_ref_rad: f32,
+    /// Pivot height reference, m (informational).
+    pub stroke_ref_m: f32,
+    /// Time from this frame to the planned impact, s (0 without a plan; negative when the
+    /// planned time has passed and the impact is not yet seen).
+    pub impact_in_s: f32,
+    /// Mode of operation.
+    pub mode: Mode,
+    /// Fault code; `Fault::None` unless `mode == Mode::Safe`.
+    pub fault: Fault,
+    /// How the plan stands.
+    pub plan: PlanStatus,
+}
+
+impl Reply for TiltCommand {
+    fn seq(&self) -> u32 {
+        self.seq
+    }
+
+    fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    fn fault(&self) -> Fault {
+        self.fault
+    }
+
+    fn bit_identical(&self, other: &Self) -> bool {
+        self.seq == other.seq
+            && self.tilt_accel_radps2.to_bits() == other.tilt_accel_radps2.to_bits()
+            && self.stroke_accel_mps2.to_bits() == other.stroke_accel_mps2.to_bits()
+            && self.tilt_ref_rad.to_bits() == other.tilt_ref_rad.to_bits()
+            && self.stroke_ref_m.to_bits() == other.stroke_ref_m.to_bits()
+            && self.impact_in_s.to_bits() == other.impact_in_s.to_bits()
+            && self.mode == other.mode
+            && self.fault == other.fault
+            && self.plan == other.plan
+    }
+}
+
+/// The plan both axes follow: the cubics' accelerations a(t) = a0 + jerk t from its start,
+/// until the impact `tau_s` after it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Active {
+    elapsed_s: f32,
+    tau_s: f32,
+    /// (a0, jerk) of the tilt and of the stroke.
+    ff: [(f32, f32); 2],
+    /// Planned, Committed, Limited or Ambiguous.
+    status: PlanStatus,
+}
+
+/// The frame's plausible ranges, precomputed from the parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Bounds {
+    x_max: f32,
+    y_min: f32,
+    y_max: f32,
+    theta_max: f32,
+    tilt_min: f32,
+    tilt_max: f32,
+    rate_max: f32,
+    stroke_min: f32,
+    stroke_max: f32,
+    velocity_max: f32,
+}
+
+impl Bounds {
+    /// Poses within the camera's plausible box; table values within their travel plus 5 %
+    /// of it, rates within twice their limits.
+    fn new(p: &TiltParams) -> Self {
+        let (t, s) = (&p.tilt, &p.stroke);
+        let tilt_margin = 0.05 * (t.max_rad - t.min_rad);
+        let stroke_margin = 0.05 * (s.max_m - s.min_m);
+        Self {
+            x_max: p.x_max_m,
+            y_min: p.y_min_m,
+            y_max: p.y_max_m,
+            theta_max: p.theta_max_rad,
+            tilt_min: t.min_rad - tilt_margin,
+            tilt_max: t.max_rad + tilt_margin,
+            rate_max: 2.0 * t.rate_max_radps,
+            stroke_min: s.min_m - stroke_margin,
+            stroke_max: s.max_m + stroke_margin,
+            velocity_max: 2.0 * s.velocity_max_mps,
+        }
+    }
+
+    /// All values in range (false for NaN: every comparison with NaN is false).
+    #[inline]
+    fn contain(&self, f: &TiltFrame) -> bool {
+        f.body_x_m.abs() <= self.x_max
+            && f.body_y_m >= self.y_min
+            && f.body_y_m <= self.y_max
+            && f.body_theta_rad.abs() <= self.theta_max
+            && f.table_angle_rad >= self.tilt_min
+            && f.table_angle_rad <= self.tilt_max
+            && f.table_rate_radps.abs() <= self.rate_max
+            && f.table_height_m >= self.stroke_min
+            && f.table_height_m <= self.stroke_max
+            && f.table_velocity_mps.abs() <= self.velocity_max
+    }
+}
+
+/// The planning pipeline's stages, one per control period (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stage {
+    /// Take the estimate now.
+    Snapshot,
+    /// Bracket the contact.
+    Bracket,
+    /// Without a warm start: the solver's start.
+    Start,
+    /// Newton step k + 1 of `contact_iterations`.
+    Newton(u8),
+    /// The angle at the contact: the body at impact.
+    Angle,
+    /// kappa-tilt and eq. 25: the table angle.
+    Law,
+    /// The pivot's height and velocity.
+    Motion,
+    /// Both cubics from the references now; commit when the impact is close.
+    Apply,
+    /// The committed plan's limits, one check per period.
+    Check(u8),
+    /// Committed and checked: nothing until the impact.
+    Wait,
+}
+
+/// The pipeline's intermediate results.
+#[derive(Clone, Copy, Debug)]
+struct Pipeline {
+    stage: Stage,
+    /// Control periods since the snapshot.
+    periods: u16,
+    /// Warm start for the next snapshot's contact time, s (NaN: none).
+    guess_s: f32,
+    now: BodyFlight,
+    solver: ContactSolver,
+    pred: ContactPrediction,
+    body: BodyAtImpact,
+    angle: TableAngle,
+    target: ImpactTarget,
+    /// The committed cubics (tilt, stroke) for the checks.
+    committed: [Cubic; 2],
+}
+
+impl Pipeline {
+    fn new() -> Self {
+        Self {
+            stage: Stage::Snapshot,
+            periods: 0,
+            guess_s: f32::NAN,
+            now: BodyFlight::default(),
+            solver: ContactSolver::default(),
+            pred: ContactPrediction::default(),
+            body: BodyAtImpact::default(),
+            angle: TableAngle::default(),
+            target: ImpactTarget::default(),
+            committed: [Cubic::default(); 2],
+        }
+    }
+
+    /// Start over at the next period, without a warm start.
+    fn restart(&mut self) {
+        self.stage = Stage::Snapshot;
+        self.periods = 0;
+        self.guess_s = f32::NAN;
+    }
+}
+
+/// The kappa-tilt controller that ships: sine and cosine from [`PolySinCos`].
+pub type TiltController = TiltControllerWith<PolySinCos>;
+
+/// The kappa-tilt controller, stepped at a fixed rate, with the sine/cosine source `T`
+/// (module docs; [`TiltController`] is the one that ships).
+#[derive(Clone, Debug)]
+pub struct TiltControllerWith<T: SinCos> {
+    params: TiltParams,
+    law: LawConstants,
+    geo: ContactGeometry,
+    estimator: FlightEstimator,
+    tilt: Axis,
+    stroke: Axis,
+    /// Plausible ranges of the frame's values (module `check`).
+    bounds: Bounds,
+    pipeline: Pipeline,
+    active: Option<Active>,
+    /// The last snapshot found no contact ahead (cleared by the next applied plan).
+    unreachable: bool,
+    /// Last measured (or, in the safe state, dead-reckoned) tilt and stroke.
+    table: [PaddleState<f32>; 2],
+    last_seq: Option<u32>,
+    stale_steps: u16,
+    mode: Mode,
+    _sin_cos: PhantomData<T>,
+}
+
+impl<T: SinCos> TiltControllerWith<T> {
+    /// A controller; the error names the first invalid parameter.
+    pub fn new(params: TiltParams) -> Result<Self, ParamError> {
+        params.validate()?;
+        let p = &params;
+        let feedback = EnergyFeedback::new(
+            p.restitution,
+            p.kappa_e_s2pm2,
+            p.gravity_mps2 * p.target_apex_m,
+            p.gravity_mps2,
+            p.l_m,
+        )?;
+        let law = LawConstants {
+            kappa: p.kappa,
+            kappa_rate_s: p.kappa_rate_s,
+            kappa_e_s2pm2: p.kappa_e_s2pm2,
+            target_energy_jpkg: feedback.target_energy_jpkg(),
+            compensation: feedback.compensation_factor(),
+            gravity_mps2: p.gravity_mps2,
+            l_m: p.l_m,
+            impact_height_m: p.impact_height_m,
+        };
+        let model = ImpactModel {
+            rho_m: p.rho_m,
+            l_m: p.l_m,
+            restitution: p.restitution,
+        };
+        let (t, s) = (&p.tilt, &p.stroke);
+        let tilt = Axis::new(t.limits(), t.kp_per_s2, t.kd_per_s, t.home_rad);
+        let stroke = Axis::new(s.limits(), s.kp_per_s2, s.kd_per_s, s.home_m);
+        Ok(Self {
+            params,
+            law,
+            geo: ContactGeometry::new(p.gravity_mps2, p.l_m),
+            estimator: FlightEstimator::new(p.estimator, model, p.dt_s, p.gravity_mps2)?,
+            tilt,
+            stroke,
+            bounds: Bounds::new(p),
+            pipeline: Pipeline::new(),
+            active: None,
+            unreachable: false,
+            table: [
+                PaddleState::new(t.home_rad, 0.0),
+                PaddleState::new(s.home_m, 0.0),
+            ],
+            last_seq: None,
+            stale_steps: 0,
+            mode: Mode::Hold,
+            _sin_cos: PhantomData,
+        })
+    }
+
+    /// The parameters this controller runs with.
+    pub fn params(&self) -> &TiltParams {
+        &self.params
+    }
+
+    /// The body's estimated flight state now (latency compensated).
+    pub fn estimate(&self) -> BodyFlight {
+        self.estimator.now()
+    }
+
+    /// Whether the flight estimate is valid.
+    pub fn estimate_valid(&self) -> bool {
+        self.estimator.valid()
+    }
+
+    /// The latest table target (valid once a plan has been made).
+    pub fn target(&self) -> ImpactTarget {
+        self.pipeline.target
+    }
+
+    /// Telemetry fields the core knows: the body's estimated height and vertical velocity
+    /// (in the `ball_*` fields) and whether the estimate is valid.
+    pub fn telemetry(&self) -> Telemetry {
+        let now = self.estimator.now();
+        Telemetry {
+            ball_height_est_m: now.y_m,
+            ball_velocity_est_mps: now.y_dot_mps,
+            estimate_valid: self.estimator.valid(),
+            ..Telemetry::default()
+        }
+    }
+
+    /// One control period: the command for `frame`.
+    pub fn step(&mut self, frame: &TiltFrame) -> TiltCommand {
+        match self.check(frame) {
+            Err(fault) => self.safe(frame.seq, fault),
+            Ok(fresh) => {
+                let cmd = self.track(frame, fresh);
+                // one test for three values: the sum of finite values is finite unless it
+                // overflows (beyond 1e38: not a plan either)
+                if (cmd.tilt_ref_rad + cmd.stroke_ref_m + cmd.impact_in_s).is_finite() {
+                    cmd
+                } else {
+                    // an internal value overflowed (not expected for validated input):
+                    // never send it
+                    self.safe(frame.seq, Fault::NonFinite)
+                }
+            }
+        }
+    }
+
+    /// The safe command for an external fault: both axes brake to rest from their last
+    /// known state (dead-reckoned), the estimator is reset.
+    pub fn safe(&mut self, seq: u32, fault: Fault) -> TiltCommand {
+        self.estimator.reset();
+        self.pipeline.restart();
+        self.active = None;
+        self.mode = Mode::Safe;
+        let dt = self.params.dt_s;
+        let mut u = [0.0f32; 2];
+        for (k, axis) in [&self.tilt, &self.stroke].into_iter().enumerate() {
+            if let (Some(s), Some(uk)) = (self.table.get_mut(k), u.get_mut(k)) {
+                *uk = axis.brake(s, dt);
+                *s = PaddleState::new(
+                    s.height_m + (s.velocity_mps + 0.5 * *uk * dt) * dt,
+                    s.velocity_mps + *uk * dt,
+                );
+            }
+        }
+        let [ut, us] = u;
+        let [tilt, stroke] = self.table;
+        TiltCommand {
+            seq,
+            tilt_accel_radps2: ut,
+            stroke_accel_mps2: us,
+            tilt_ref_rad: tilt.height_m,
+            stroke_ref_m: stroke.height_m,
+            impact_in_s: 0.0,
+            mode: Mode::Safe,
+            fault,
+            plan: PlanStatus::Idle,
+        }
+    }
+
+    /// A valid frame: estimate, one pipeline stage, feed-forward, track.
+    fn track(&mut self, frame: &TiltFrame, fresh: bool) -> TiltCommand {
+        let dt = self.params.dt_s;
+        let tilt_m = PaddleState::new(frame.table_angle_rad, frame.table_rate_radps);
+        let stroke_m = PaddleState::new(frame.table_height_m, frame.table_velocity_mps);
+        self.table = [tilt_m, stroke_m];
+        let pose = [frame.body_x_m, frame.body_y_m, frame.body_theta_rad];
+        let update = self.estimator.step(fresh.then_some(pose));
+        let (ff, plan, impact_in_s) = if self.estimator.valid() {
+            if self.mode != Mode::Track {
+                // entering Track: plan from where the table is
+                self.tilt.p = tilt_m.height_m;
+                self.tilt.v = tilt_m.velocity_mps;
+                self.stroke.p = stroke_m.height_m;
+                self.stroke.v = stroke_m.velocity_mps;
+                self.active = None;
+                self.pipeline.restart();
+            }
+            self.mode = Mode::Track;
+            if update.impact || update.restarted {
+                // the impact model ran (or the fit restarted) this period: no stage
+                self.pipeline.restart();
+            } else {
+                self.run_stage();
+            }
+            self.feed_forward()
+        } else {
+            self.mode = Mode::Hold;
+            self.active = None;
+            self.estimator.clear_plan();
+            for axis in [&mut self.tilt, &mut self.stroke] {
+                axis.p = axis.home;
+                axis.v = 0.0;
+            }
+            ([0.0, 0.0], PlanStatus::Idle, 0.0)
+        };
+        let [ff_t, ff_s] = ff;
+        let (ut, sat_t) = self.tilt.command(ff_t, &tilt_m, dt);
+        let (us, sat_s) = self.stroke.command(ff_s, &stroke_m, dt);
+        self.tilt.advance(ff_t, dt);
+        self.stroke.advance(ff_s, dt);
+        TiltCommand {
+            seq: frame.seq,
+            tilt_accel_radps2: ut,
+            stroke_accel_mps2: us,
+            tilt_ref_rad: self.tilt.p,
+            stroke_ref_m: self.stroke.p,
+            impact_in_s,
+            mode: self.mode,
+            fault: Fault::None,
+            plan: match plan {
+                PlanStatus::Planned | PlanStatus::Committed | PlanStatus::Ambiguous
+                    if sat_t || sat_s =>
+                {
+                    PlanStatus::Limited
+                }
+                other => other,
+            },
+        }
+    }
+
+    /// This period's feed-forward of both axes from the active plan (the cubics until the
+    /// impact time; on at the impact velocity through the impact window; then braking),
+    /// the plan's status and the time to the impact.
+    fn feed_forward(&mut self) -> ([f32; 2], PlanStatus, f32) {
+        let dt = self.params.dt_s;
+        let window = self.params.estimator.latency_s + 2.0 * dt;
+        let Some(a) = self.active.as_mut() else {
+            let status = if self.unreachable {
+                PlanStatus::Unreachable
+            } else {
+                PlanStatus::Idle
+            };
+            let ff = [
+                self.tilt.brake_reference(dt),
+                self.stroke.brake_reference(dt),
+            ];
+            return (ff, status, 0.0);
+        };
+        let t = a.elapsed_s;
+        a.elapsed_s = t + dt;
+        let [(a0t, jt), (a0s, js)] = a.ff;
+        let ff = if t < a.tau_s {
+            let tm = t + 0.5 * dt;
+            [a0t + jt * tm, a0s + js * tm]
+        } else if t < a.tau_s + window {
+            [0.0, 0.0]
+        } else {
+            [
+                self.tilt.brake_reference(dt),
+                self.stroke.brake_reference(dt),
+            ]
+        };
+        (ff, a.status, a.tau_s - t)
+    }
+
+    /// One stage of the planning pipeline (module docs).
+    fn run_stage(&mut self) {
+        let p = &mut self.pipeline;
+        p.periods = p.periods.saturating_add(1);
+        match p.stage {
+            Stage::Snapshot => {
+                p.now = self.estimator.now();
+                p.stage = Stage::Bracket;
+            }
+            Stage::Bracket => self.bracket(),
+            Stage::Start => {
+                p.solver.cold_start(&self.geo);
+                p.stage = Stage::Newton(0);
+            }
+            Stage::Newton(k) => {
+                p.solver.iterate::<T>(&self.geo);
+                let next = k.saturating_add(1);
+                p.stage = if next >= self.params.contact_iterations {
+                    Stage::Angle
+                } else {
+                    Stage::Newton(next)
+                };
+            }
+            Stage::Angle => {
+                p.pred = p.solver.finish::<T>();
+                let (now, tau) = (&p.now, p.pred.time_s);
+                p.body = BodyAtImpact {
+                    theta_rad: now.theta_rad + now.theta_dot_radps * tau,
+                    sin_theta: p.pred.sin_theta,
+                    cos_theta: p.pred.cos_theta,
+                    x_dot_mps: now.x_dot_mps,
+                    y_dot_mps: now.y_dot_mps - self.law.gravity_mps2 * tau,
+                    theta_dot_radps: now.theta_dot_radps,
+                };
+                p.stage = Stage::Law;
+            }
+            Stage::Law => {
+                p.angle = table_angle::<T>(&self.law, &self.tilt.limits, &p.body);
+                p.stage = Stage::Motion;
+            }
+            Stage::Motion => {
+                p.target = table_motion(&self.law, &self.stroke.limits, &p.body, &p.angle);
+                p.stage = Stage::Apply;
+            }
+            Stage::Apply => self.apply(),
+            Stage::Check(k) => self.check_committed(k),
+            Stage::Wait => {
+                // the estimator applies the impact one latency after its time; far past
+                // that the plan was missed: plan afresh
+                if let Some(a) = self.active {
+                    let late = self.params.estimator.latency_s + 4.0 * self.params.dt_s;
+                    if a.elapsed_s > a.tau_s + late {
+                        p.restart();
+                    }
+                }
+            }
+        }
+    }
+
+    /// Bracket the contact from the snapshot (or find none ahead).
+    fn bracket(&mut self) {
+        let p = &mut self.pipeline;
+        let now = &p.now;
+        let input = ContactInput {
+            height_above_m: now.y_m - self.law.impact_height_m,
+            y_dot_mps: now.y_dot_mps,
+            theta_rad: now.theta_rad,
+            theta_dot_radps: now.theta_dot_radps,
+        };
+        // the last cycle's contact time, moved to this snapshot (`periods` ago, this
+        // period included: the snapshot was the previous one)
+        let guess = p.guess_s - f32::from(p.periods.saturating_sub(1)) * self.params.dt_s;
+        p.periods = 1;
+        match ContactSolver::bracket(&self.geo, &input, guess) {
+            Some(solver) => {
+                p.stage = if solver.needs_start() {
+                    Stage::Start
+                } else {
+                    Stage::Newton(0)
+                };
+                p.solver = solver;
+            }
+            None => {
+                p.guess_s = f32::NAN;
+                p.stage = Stage::Snapshot;
+                self.unreachable = true;
+                self.active = None;
+                self.estimator.clear_plan();
+            }
+        }
+    }
+
+    /// Both cubics from the references now to the target; commit when close.
+    fn apply(&mut self) {
+        let dt = self.params.dt_s;
+        let p = &mut self.pipeline;
+        // the snapshot was `periods` periods ago (this one included)
+        let since = f32::from(p.periods) * dt;
+        let tau = (p.pred.time_s - since).max_r(dt);
+        let t = &p.target;
+        let inv_tau = 1.0 / tau;
+        let tilt = Cubic::hermite(self.tilt.p, self.tilt.v, t.alpha_rad, 0.0, inv_tau);
+        let stroke = Cubic::hermite(
+            self.stroke.p,
+            self.stroke.v,
+            t.height_m,
+            t.velocity_mps,
+            inv_tau,
+        );
+        let committed = tau <= self.params.commit_s;
+        let status = if t.clamped {
+            PlanStatus::Limited
+        } else if !p.pred.unique {
+            PlanStatus::Ambiguous
+        } else if committed {
+            PlanStatus::Committed
+        } else {
+            PlanStatus::Planned
+        };
+        self.active = Some(Active {
+            elapsed_s: 0.0,
+            tau_s: tau,
+            ff: [
+                (2.0 * tilt.c2, 6.0 * tilt.c3),
+                (2.0 * stroke.c2, 6.0 * stroke.c3),
+            ],
+            status,
+        });
+        self.unreachable = false;
+        self.estimator.plan_impact(PlannedImpact {
+            in_s: tau,
+            theta_rad: p.body.theta_rad,
+            sin_theta: p.body.sin_theta,
+            cos_theta: p.body.cos_theta,
+            sin_alpha: t.sin_alpha,
+            cos_alpha: t.cos_alpha,
+            normal_velocity_mps: t.normal_velocity_mps,
+        });
+        p.guess_s = p.pred.time_s;
+        if committed {
+            p.committed = [tilt, stroke];
+            p.stage = Stage::Check(0);
+        } else {
+            // the periods to the next snapshot count from the snapshot
+            p.stage = Stage::Snapshot;
+        }
+    }
+
+    /// Check the committed plan against one axis's limits (k: tilt dynamics, tilt travel,
+    /// stroke dynamics, stroke travel).
+    fn check_committed(&mut self, k: u8) {
+        let p = &mut self.pipeline;
+        let [tilt, stroke] = p.committed;
+        let Some(a) = self.active.as_mut() else {
+            p.stage = Stage::Wait;
+            return;
+        };
+        let tau = a.tau_s;
+        let ok = match k {
+            0 => tilt.within_dynamics(tau, &self.tilt.limits),
+            1 => tilt.within_travel(tau, &self.tilt.limits),
+            2 => stroke.within_dynamics(tau, &self.stroke.limits),
+            _ => stroke.within_travel(tau, &self.stroke.limits),
+        };
+        if !ok {
+            a.status = PlanStatus::Limited;
+        }
+        p.stage = if k >= 3 {
+            Stage::Wait
+        } else {
+            Stage::Check(k + 1)
+        };
+    }
+
+    /// Validate a frame; `Ok(true)` if it carries a new camera sample, `Ok(false)` if it
+    /// repeats the last one (within the stale limit).
+    fn check(&mut self, frame: &TiltFrame) -> Result<bool, Fault> {
+        // every comparison is false for NaN, so a non-finite value fails here too; which
+        // fault it was is sorted out only on that path
+        let in_range = self.bounds.contain(frame);
+        if !in_range {
+            let values = [
+                frame.body_x_m,
+                frame.body_y_m,
+                frame.body_theta_rad,
+                frame.table_angle_rad,
+                frame.table_rate_radps,
+                frame.table_height_m,
+                frame.table_velocity_mps,
+            ];
+            return Err(if values.iter().all(|v| v.is_finite()) {
+                Fault::OutOfRange
+            } else {
+                Fault::NonFinite
+            });
+        }
+        let fresh = match self.last_seq {
+            None => true,
+            Some(last) => {
+                let ahead = frame.seq.wrapping_sub(last);
+                ahead != 0 && ahead < u32::MAX / 2
+            }
+        };
+        if fresh {
+            self.last_seq = Some(frame.seq);
+            self.stale_steps = 0;
+            Ok(true)
+        } else {
+            self.stale_steps = self.stale_steps.saturating_add(1);
+            if self.stale_steps > self.params.stale_limit_steps {
+                Err(Fault::Stale)
+            } else {
+                Ok(false)
+            }
+        }
+    }
+}
+
+impl<T: SinCos> FixedRate for TiltControllerWith<T> {
+    type Params = TiltParams;
+    type Frame = TiltFrame;
+    type Command = TiltCommand;
+
+    fn new(params: TiltParams) -> Result<Self, ParamError> {
+        TiltControllerWith::new(params)
+    }
+
+    fn params(&self) -> &TiltParams {
+        TiltControllerWith::params(self)
+    }
+
+    fn step(&mut self, frame: &TiltFrame) -> TiltCommand {
+        TiltControllerWith::step(self, frame)
+    }
+
+    fn safe(&mut self, seq: u32, fault: Fault) -> TiltCommand {
+        TiltControllerWith::safe(self, seq, fault)
+    }
+
+    fn telemetry(&self) -> Telemetry {
+        TiltControllerWith::telemetry(self)
+    }
+}
