@@ -6,7 +6,7 @@
 //! valve timing; never from the sampled loop itself.
 
 use dexter_core::hop::{EnergyServoThrust, RaibertThrust};
-use dexter_core::hop_control::{HopController, HopThrust};
+use dexter_core::hop_control::HopController;
 use dexter_sim::controller::{ControllerError, Sil, StepController, StepOutput};
 use dexter_sim::model::hopper::sampled::{
     exact_orbit, run_sampled, run_sil, DetectorOptions, SampledConfig, SampledEnd, SampledRun,
@@ -61,8 +61,13 @@ fn no_detection_errors(run: &SampledRun) {
 
 #[test]
 fn linear_raibert_at_1khz_settles_to_period_1_within_1_percent_of_eq17() {
-    let run = run_sil(&config(linear(), &raibert(41.86, 0.05), 1000.0, DetectorOptions::default()))
-        .unwrap();
+    let run = run_sil(&config(
+        linear(),
+        &raibert(41.86, 0.05),
+        1000.0,
+        DetectorOptions::default(),
+    ))
+    .unwrap();
     assert_eq!(run.end, SampledEnd::Completed);
     assert_eq!(run.cycles, 300);
     assert_eq!(run.period(), Some(1), "{:?}", run.settle);
@@ -99,7 +104,12 @@ fn without_the_bottom_prediction_the_thrust_is_late_and_500hz_misses_1_percent()
 
 /// The Raibert thrust whose exact fixed point (eq. 17) has hop height `h_m`, by bisection.
 fn thrust_for_hop(model: &ValveModel, delta: f64, h_m: f64) -> f64 {
-    let hop = |tau: f64| exact_orbit(model, &raibert(tau, delta), 1.0).unwrap().unwrap().hop_heights_m[0];
+    let hop = |tau: f64| {
+        exact_orbit(model, &raibert(tau, delta), 1.0)
+            .unwrap()
+            .unwrap()
+            .hop_heights_m[0]
+    };
     let (mut lo, mut hi) = (20.0, 120.0);
     assert!(hop(lo) < h_m && hop(hi) > h_m);
     for _ in 0..60 {
@@ -126,12 +136,20 @@ fn energy_servo_reaches_the_target_hop_height() {
     let h_star = 0.13;
     let tau0 = thrust_for_hop(&linear(), 0.05, h_star);
     for start in [1.0, 0.55] {
-        let mut c = config(linear(), &servo(tau0, 5.0, h_star), 1000.0, DetectorOptions::default());
+        let mut c = config(
+            linear(),
+            &servo(tau0, 5.0, h_star),
+            1000.0,
+            DetectorOptions::default(),
+        );
         c.start_height_m = start;
         let run = run_sil(&c).unwrap();
         assert!(run.period().is_some(), "{:?}", run.settle);
         let last = run.recent_hop_heights_m.last().copied().unwrap();
-        assert!((last - h_star).abs() < 0.01 * h_star, "start {start}: hop {last} vs {h_star}");
+        assert!(
+            (last - h_star).abs() < 0.01 * h_star,
+            "start {start}: hop {last} vs {h_star}"
+        );
         assert!(run.fixed_point_error.unwrap() < 0.01);
         no_detection_errors(&run);
     }
@@ -147,26 +165,50 @@ fn energy_servo_off_nominal_moves_the_hop_toward_its_target() {
         .unwrap()
         .unwrap()
         .hop_heights_m[0];
-    let run = run_sil(&config(linear(), &servo(tau0, 5.0, h_star), 1000.0, DetectorOptions::default()))
-        .unwrap();
+    let run = run_sil(&config(
+        linear(),
+        &servo(tau0, 5.0, h_star),
+        1000.0,
+        DetectorOptions::default(),
+    ))
+    .unwrap();
     let exact = run.exact.as_ref().unwrap();
     assert_eq!(exact.source, "exact-thrust simulator");
     let h_servo = exact.hop_heights_m[0];
-    assert!(raibert_hop < h_servo && h_servo < h_star, "{raibert_hop} {h_servo} {h_star}");
+    assert!(
+        raibert_hop < h_servo && h_servo < h_star,
+        "{raibert_hop} {h_servo} {h_star}"
+    );
     let last = run.recent_hop_heights_m.last().copied().unwrap();
-    assert!(raibert_hop < last && last < h_star, "{raibert_hop} < {last} < {h_star}");
-    assert!(run.fixed_point_error.unwrap() < 0.01, "{:?}", run.fixed_point_error);
+    assert!(
+        raibert_hop < last && last < h_star,
+        "{raibert_hop} < {last} < {h_star}"
+    );
+    assert!(
+        run.fixed_point_error.unwrap() < 0.01,
+        "{:?}",
+        run.fixed_point_error
+    );
 }
 
 #[test]
 fn above_the_doubling_the_limp_persists_under_sampling() {
     // the full model with exactly timed thrust doubles between tau = 60 (period 1) and
     // 80 m/s^2 (period 2: hops of 1.18 and 0.27 m), by the exact simulator
-    let below = exact_orbit(&full(), &raibert(60.0, 0.01), 1.0).unwrap().unwrap();
-    let above = exact_orbit(&full(), &raibert(80.0, 0.01), 1.0).unwrap().unwrap();
+    let below = exact_orbit(&full(), &raibert(60.0, 0.01), 1.0)
+        .unwrap()
+        .unwrap();
+    let above = exact_orbit(&full(), &raibert(80.0, 0.01), 1.0)
+        .unwrap()
+        .unwrap();
     assert_eq!((below.period(), above.period()), (1, 2));
     for (tau, period) in [(60.0, 1), (80.0, 2)] {
-        let mut c = config(full(), &raibert(tau, 0.01), 1000.0, DetectorOptions::default());
+        let mut c = config(
+            full(),
+            &raibert(tau, 0.01),
+            1000.0,
+            DetectorOptions::default(),
+        );
         c.cycles = 400;
         // the sampled full model does not lock to the control grid: its hops jitter by a few
         // per cent, so the orbit is judged at 10 %
@@ -186,7 +228,12 @@ fn above_the_doubling_the_limp_persists_under_sampling() {
 
 #[test]
 fn a_short_or_unsettled_run_reports_no_period() {
-    let mut c = config(linear(), &raibert(41.86, 0.05), 1000.0, DetectorOptions::default());
+    let mut c = config(
+        linear(),
+        &raibert(41.86, 0.05),
+        1000.0,
+        DetectorOptions::default(),
+    );
     c.cycles = 40; // fewer than the two windows of 32 hops a period needs
     let run = run_sil(&c).unwrap();
     assert_eq!((run.period(), run.fixed_point_error), (None, None));
@@ -194,8 +241,13 @@ fn a_short_or_unsettled_run_reports_no_period() {
     // wandering amplitude, and neither the loop nor the exact simulator settles at 1e-3
     let h_star = 0.13;
     let tau0 = 0.9 * thrust_for_hop(&linear(), 0.05, h_star);
-    let run = run_sil(&config(linear(), &servo(tau0, 40.0, h_star), 1000.0, DetectorOptions::default()))
-        .unwrap();
+    let run = run_sil(&config(
+        linear(),
+        &servo(tau0, 40.0, h_star),
+        1000.0,
+        DetectorOptions::default(),
+    ))
+    .unwrap();
     assert_eq!(run.period(), None, "{:?}", run.settle);
     assert_eq!(run.fixed_point_error, None);
 }
@@ -218,7 +270,12 @@ impl StepController<HopController> for Counting {
 
 #[test]
 fn any_step_controller_closes_the_same_loop() {
-    let c = config(linear(), &raibert(41.86, 0.05), 1000.0, DetectorOptions::default());
+    let c = config(
+        linear(),
+        &raibert(41.86, 0.05),
+        1000.0,
+        DetectorOptions::default(),
+    );
     let sil = run_sil(&c).unwrap();
     let mut counting = Counting {
         inner: Sil::new(c.control).unwrap(),
@@ -226,7 +283,10 @@ fn any_step_controller_closes_the_same_loop() {
     };
     let other = run_sampled(&c, &mut counting).unwrap();
     assert_eq!(counting.steps, other.control_steps);
-    assert_eq!(sil, other, "the loop is deterministic and does not depend on the wrapper");
+    assert_eq!(
+        sil, other,
+        "the loop is deterministic and does not depend on the wrapper"
+    );
 }
 
 #[test]
@@ -270,8 +330,16 @@ fn noisy_compression_with_hysteresis_does_not_chatter() {
         debounce_samples: 2,
         ..late_detection()
     };
-    let mut c =
-        SampledConfig::new(linear(), &raibert(41.86, 0.05), 1000.0, &det, sensor, 1.0, 300).unwrap();
+    let mut c = SampledConfig::new(
+        linear(),
+        &raibert(41.86, 0.05),
+        1000.0,
+        &det,
+        sensor,
+        1.0,
+        300,
+    )
+    .unwrap();
     c.settle_tolerance = 0.05;
     let run = run_sil(&c).unwrap();
     assert_eq!(run.end, SampledEnd::Completed);
@@ -306,7 +374,12 @@ fn an_implausible_sensor_is_counted_as_safe_steps() {
     c.compare_exact = false;
     let run = run_sil(&c).unwrap();
     assert_eq!(run.end, SampledEnd::TimeLimit);
-    assert!(run.safe_steps > run.control_steps / 2, "{} of {}", run.safe_steps, run.control_steps);
+    assert!(
+        run.safe_steps > run.control_steps / 2,
+        "{} of {}",
+        run.safe_steps,
+        run.control_steps
+    );
     assert_eq!(run.faults.out_of_range, run.safe_steps);
     assert_eq!(run.period(), None);
 }
@@ -325,7 +398,11 @@ fn bad_settings_are_refused_with_their_key() {
         rate_hz: Some(1e9),
         ..SensorConfig::default()
     };
-    assert!(err(fast).starts_with("hopper.sensor.rate_hz"), "{}", err(fast));
+    assert!(
+        err(fast).starts_with("hopper.sensor.rate_hz"),
+        "{}",
+        err(fast)
+    );
     let slow = SensorConfig {
         latency_s: f64::NAN,
         ..SensorConfig::default()
@@ -333,12 +410,21 @@ fn bad_settings_are_refused_with_their_key() {
     assert!(err(slow).starts_with("hopper.control"), "{}", err(slow));
     let mut c = config(linear(), &law, 1000.0, det);
     c.max_time_s = 1e12;
-    assert!(run_sil(&c).unwrap_err().to_string().starts_with("hopper.control.max_time_s"));
+    assert!(run_sil(&c)
+        .unwrap_err()
+        .to_string()
+        .starts_with("hopper.control.max_time_s"));
     let mut c = config(linear(), &law, 1000.0, det);
     c.start_height_m = 0.2;
-    assert!(run_sil(&c).unwrap_err().to_string().starts_with("hopper.initial_heights_m"));
+    assert!(run_sil(&c)
+        .unwrap_err()
+        .to_string()
+        .starts_with("hopper.initial_heights_m"));
     let c = SampledConfig::new(linear(), &law, 0.0, &det, SensorConfig::default(), 1.0, 10);
-    assert!(c.unwrap_err().to_string().starts_with("hopper.control.rate_hz"));
+    assert!(c
+        .unwrap_err()
+        .to_string()
+        .starts_with("hopper.control.rate_hz"));
 }
 
 /// The accuracy-costs-time table: rate vs fixed-point error (tuned linear model, Raibert's
@@ -371,4 +457,50 @@ fn rate_table() {
     // at 5 kHz both are far better than at 250 Hz, and nothing failed to settle
     assert!(worst.iter().all(|e| e.is_finite()), "{worst:?}");
     assert!(worst[8] < worst[0] && worst[9] < worst[1], "{worst:?}");
+}
+
+#[test]
+fn timeline_and_cycle_records_for_a_plot_of_a_few_hops() {
+    use dexter_core::hop::StancePhase;
+    use dexter_sim::model::hopper::sampled::TimelineWindow;
+    let mut c = config(
+        linear(),
+        &raibert(41.86, 0.05),
+        1000.0,
+        DetectorOptions::default(),
+    );
+    c.cycles = 20;
+    c.record_cycles = true;
+    c.timeline = Some(TimelineWindow {
+        first_cycle: 10,
+        cycles: 3,
+    });
+    let run = run_sil(&c).unwrap();
+    assert_eq!(run.records.len(), 20);
+    let r = &run.records[10..13];
+    let (t0, t1) = (r[0].touchdown_time_s, r[2].next_touchdown_time_s);
+    let rows = &run.timeline;
+    // one row per control step from the 10th touchdown to the 13th
+    assert!(rows.iter().all(|row| (10..13).contains(&row.cycle)));
+    let expect = ((t1 - t0) / 1e-3).round() as usize;
+    assert!(
+        rows.len().abs_diff(expect) <= 1,
+        "{} rows vs {expect}",
+        rows.len()
+    );
+    for row in rows {
+        assert_eq!(row.contact, row.true_phase != StancePhase::Flight);
+        assert_eq!(row.compression_m > 0.0, row.contact, "{row:?}");
+        if row.valve_open {
+            assert_eq!(row.detected_phase, StancePhase::Thrust);
+        }
+        // noise-free sensor at the control steps: the frame carries the truth (as f32)
+        assert!((row.measured_compression_m - row.compression_m).abs() < 1e-7);
+    }
+    for c in &run.records {
+        assert!(c.touchdown_time_s < c.bottom_time_s && c.bottom_time_s < c.liftoff_time_s);
+        assert!(c.liftoff_time_s < c.apex_time_s && c.apex_time_s < c.next_touchdown_time_s);
+        assert!((c.valve_close_time_s - c.valve_open_time_s - 0.05).abs() < 1.5e-3);
+        assert!(!c.early_liftoff);
+    }
 }

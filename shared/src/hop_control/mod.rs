@@ -79,30 +79,35 @@
 //!
 //! The step has no loop, no recursion and no call (no transcendental function, no soft-float
 //! helper): every path is a fixed sequence of compares, multiply-adds, float/int conversions
-//! and at most 5 `vdiv.f32` (the flight-time correction and the parabola vertex). Its work
+//! and at most 4 `vdiv.f32` (one parabola vertex, or the flight-time correction). Its work
 //! therefore does not depend on the parameters: the longest path through the compiled
 //! function bounds every step of every configuration the validator accepts.
 //!
-//! Static count of `HopController::step` compiled for `thumbv7em-none-eabihf` (release,
-//! `lto = "fat"`, `opt-level = 3`), by a longest-path search over the disassembly's control
-//! flow graph (which is acyclic: the search finds no cycle and no `bl`): **349 instructions
-//! in the function, longest path 175**, 5 `vdiv.f32` (14 cycles each on the M4), no
-//! `vsqrt.f32`. At one cycle per other instruction that is at most about 175 + 5 x 13 =
-//! 240 cycles. The branches, in the order a step runs:
+//! Static count of `HopController::step` (behind an `extern "C"` wrapper that stores the
+//! command) compiled for `thumbv7em-none-eabihf` with the firmware's release profile
+//! (`lto = "fat"`, `opt-level = 3`, `codegen-units = 1`), by a longest-path search over the
+//! control-flow graph of its disassembly, which is acyclic (the search finds no cycle and no
+//! `bl`/`blx`): **431 instructions in the function, longest path 187 instructions**, at most
+//! 4 `vdiv.f32` on one path (9 in the function), no `vsqrt.f32`. Weighting `vdiv.f32` at its
+//! 14 cycles and everything else at 1, the worst path is about 239 cycles. The branches, in
+//! the order a step runs:
 //!
 //! | branch | what it does | taken |
 //! | --- | --- | --- |
 //! | check | finite and range tests of 1-2 floats, sequence freshness | every step |
 //! | flight sample | apex tracking, arming and touchdown debounce | flight, fresh sample |
 //! | touchdown | flight-time energy (1 division), servo clamp, bottom search reset | once per hop |
-//! | stance sample | liftoff debounce, running maximum | stance, fresh sample |
-//! | bottom | parabola vertex (4 divisions), lateness, plan (1 conversion) | once per hop |
+//! | stance sample | liftoff debounce, running maximum, fall test | stance, fresh sample |
+//! | prediction | parabola through the last three samples (4 divisions) | compression, no fall |
+//! | bottom | vertex around the maximum (4 divisions) after a fall, or the predicted one; the plan (1 conversion) | once per hop |
 //! | liftoff | reset timers | once per hop |
 //! | valve | thrust countdown, command | every step |
 //! | safe | reset, safe command | a fault |
 //!
 //! At most one of touchdown / bottom / liftoff runs in a step (one phase transition per
-//! sample), so the longest path is check + stance sample + bottom + valve.
+//! sample), and the fall test and the prediction exclude each other, so the longest path is
+//! check + stance sample + one vertex + plan + valve. The QEMU icount measurement of the
+//! firmware build comes with the firmware integration.
 
 mod detect;
 mod params;
