@@ -407,7 +407,20 @@ fn bad_settings_are_refused_with_their_key() {
         latency_s: f64::NAN,
         ..SensorConfig::default()
     };
-    assert!(err(slow).starts_with("hopper.control"), "{}", err(slow));
+    assert!(
+        err(slow).starts_with("hopper.sensor.latency_s"),
+        "{}",
+        err(slow)
+    );
+    let slow = SensorConfig {
+        rate_hz: Some(100.0),
+        ..SensorConfig::default()
+    };
+    assert!(
+        err(slow).starts_with("hopper.control.stale_limit_steps"),
+        "{}",
+        err(slow)
+    );
     let mut c = config(linear(), &law, 1000.0, det);
     c.max_time_s = 1e12;
     assert!(run_sil(&c)
@@ -502,5 +515,133 @@ fn timeline_and_cycle_records_for_a_plot_of_a_few_hops() {
         assert!(c.liftoff_time_s < c.apex_time_s && c.apex_time_s < c.next_touchdown_time_s);
         assert!((c.valve_close_time_s - c.valve_open_time_s - 0.05).abs() < 1.5e-3);
         assert!(!c.early_liftoff);
+    }
+}
+
+#[test]
+fn cycles_stream_to_a_sink_and_controller_errors_name_their_key() {
+    use dexter_sim::model::hopper::sampled::run_sampled_with;
+    let mut c = config(
+        linear(),
+        &raibert(41.86, 0.05),
+        1000.0,
+        DetectorOptions::default(),
+    );
+    c.cycles = 25;
+    c.record_cycles = true;
+    let mut streamed = Vec::new();
+    let mut sil = Sil::new(c.control).unwrap();
+    let run = run_sampled_with(&c, &mut sil, &mut |r| streamed.push(*r)).unwrap();
+    assert_eq!(streamed, run.records);
+    assert_eq!(streamed.len(), 25);
+    let det = DetectorOptions {
+        debounce_samples: 0,
+        ..DetectorOptions::default()
+    };
+    let e = SampledConfig::new(
+        linear(),
+        &raibert(41.86, 0.05),
+        1000.0,
+        &det,
+        SensorConfig::default(),
+        1.0,
+        5,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("hopper.control.debounce_samples is invalid"),
+        "{e}"
+    );
+}
+
+#[test]
+fn the_json_summary_has_the_keys_of_issue_12() {
+    let run = run_sil(&config(
+        linear(),
+        &raibert(41.86, 0.05),
+        1000.0,
+        DetectorOptions::default(),
+    ))
+    .unwrap();
+    let v = serde_json::to_value(run.summary()).unwrap();
+    assert_eq!(v["cycles"], 300);
+    assert_eq!(v["period"], 1);
+    assert_eq!(v["late_apex_heights_m"].as_array().unwrap().len(), 8);
+    assert!(v["fixed_point_error"].as_f64().unwrap() < 0.01);
+    assert_eq!(v["exact_orbit"]["source"], "eq. 17");
+    let p = &v["phase_detection_errors"];
+    for key in ["touchdown", "bottom", "liftoff"] {
+        assert_eq!(p[key]["events"], 300, "{key}");
+        assert!(p[key]["lag"]["mean_s"].is_number(), "{key}");
+    }
+    assert!(p["thrust_start_s"]["max_s"].is_number());
+    assert_eq!(v["safe_steps"], 0);
+    assert_eq!(v["faults"]["stale"], 0);
+    assert_eq!(v["end"], "completed");
+    // an unsettled run: period and fixed_point_error are null
+    let mut c = config(
+        linear(),
+        &raibert(41.86, 0.05),
+        1000.0,
+        DetectorOptions::default(),
+    );
+    c.cycles = 10;
+    let v = serde_json::to_value(run_sil(&c).unwrap().summary()).unwrap();
+    assert!(v["period"].is_null() && v["fixed_point_error"].is_null());
+}
+
+/// The limp (full model, tau = 80 m/s^2, delta = 10 ms) against the control rate: its
+/// period and its distance from the exact 2-cycle. Run with `--nocapture` to print it.
+#[test]
+fn limp_rate_table() {
+    println!("rate_hz  period  fixed_point_error  spread");
+    for rate in [500.0, 1000.0, 2000.0, 5000.0] {
+        let mut c = config(
+            full(),
+            &raibert(80.0, 0.01),
+            rate,
+            DetectorOptions::default(),
+        );
+        c.cycles = 400;
+        c.settle_tolerance = 0.1;
+        let run = run_sil(&c).unwrap();
+        let period = run.period().map_or("none".to_string(), |p| p.to_string());
+        println!(
+            "{rate:7}  {period:>6}  {:17.3e}  {:.3e}",
+            run.fixed_point_error.unwrap_or(f64::NAN),
+            run.settle.spread
+        );
+        if rate >= 1000.0 {
+            assert_eq!(run.period(), Some(2), "{rate} Hz: {:?}", run.settle);
+        }
+    }
+}
+
+#[test]
+fn a_sensor_at_its_own_rate_feeds_the_1khz_loop() {
+    // 2 kHz (the plant stops at every sample; the controller sees every other one) and
+    // 500 Hz (each sample repeated for 2 steps, within the stale limit)
+    for rate in [2000.0, 500.0] {
+        let sensor = SensorConfig {
+            rate_hz: Some(rate),
+            ..SensorConfig::default()
+        };
+        let det = DetectorOptions::default();
+        let c = SampledConfig::new(
+            linear(),
+            &raibert(41.86, 0.05),
+            1000.0,
+            &det,
+            sensor,
+            1.0,
+            300,
+        )
+        .unwrap();
+        let run = run_sil(&c).unwrap();
+        assert_eq!(run.safe_steps, 0);
+        assert_eq!(run.period(), Some(1), "{rate} Hz: {:?}", run.settle);
+        let fpe = run.fixed_point_error.unwrap();
+        assert!(fpe < 0.01, "{rate} Hz: {fpe}");
     }
 }

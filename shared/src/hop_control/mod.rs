@@ -35,7 +35,8 @@
 //!
 //! The compensation (`predict_bottom`, for low-noise sensors) fits the parabola through the
 //! last three rising samples ([`BottomSearch::predicted_vertex_steps`]) and opens the valve
-//! at the control step nearest to its vertex (less the known `sensor_latency_s`): the
+//! at the control step nearest to its vertex (less the known `sensor_latency_s`; also on a
+//! step without a new sample, for a sensor slower than the control rate): the
 //! opening is then within half a period of the true bottom, before or after, instead of
 //! always late by about one period. The fall test stays as the fallback.
 //!
@@ -87,9 +88,9 @@
 //! command) compiled for `thumbv7em-none-eabihf` with the firmware's release profile
 //! (`lto = "fat"`, `opt-level = 3`, `codegen-units = 1`), by a longest-path search over the
 //! control-flow graph of its disassembly, which is acyclic (the search finds no cycle and no
-//! `bl`/`blx`): **431 instructions in the function, longest path 187 instructions**, at most
+//! `bl`/`blx`): **463 instructions in the function, longest path 209 instructions**, at most
 //! 4 `vdiv.f32` on one path (9 in the function), no `vsqrt.f32`. Weighting `vdiv.f32` at its
-//! 14 cycles and everything else at 1, the worst path is about 239 cycles. The branches, in
+//! 14 cycles and everything else at 1, the worst path is about 255 cycles. The branches, in
 //! the order a step runs:
 //!
 //! | branch | what it does | taken |
@@ -99,6 +100,7 @@
 //! | touchdown | flight-time energy (1 division), servo clamp, bottom search reset | once per hop |
 //! | stance sample | liftoff debounce, running maximum, fall test | stance, fresh sample |
 //! | prediction | parabola through the last three samples (4 divisions) | compression, no fall |
+//! | due bottom | open at the step nearest the predicted bottom (also between samples) | compression, every step |
 //! | bottom | vertex around the maximum (4 divisions) after a fall, or the predicted one; the plan (1 conversion) | once per hop |
 //! | liftoff | reset timers | once per hop |
 //! | valve | thrust countdown, command | every step |
@@ -203,6 +205,8 @@ pub struct HopController {
     thrust_left: u32,
     stance_thrust_mps2: f32,
     liftoff_step: Option<u32>,
+    /// The latest bottom prediction: (step it was made, true bottom that many steps later).
+    predicted: Option<(u32, f32)>,
     apex_m: f32,
     energy_jpkg: f32,
     last_seq: Option<u32>,
@@ -233,6 +237,7 @@ impl HopController {
             thrust_left: 0,
             stance_thrust_mps2: 0.0,
             liftoff_step: None,
+            predicted: None,
             apex_m: f32::NEG_INFINITY,
             energy_jpkg: f32::NAN,
             last_seq: None,
@@ -280,6 +285,7 @@ impl HopController {
                 if fresh {
                     self.on_sample(frame);
                 }
+                self.due_bottom();
                 self.command(frame.seq)
             }
         }
@@ -296,6 +302,7 @@ impl HopController {
         self.phase = StancePhase::Flight;
         self.armed = false;
         self.thrust_left = 0;
+        self.predicted = None;
         self.touchdown.reset();
         self.liftoff.reset();
         self.liftoff_step = None;
@@ -376,13 +383,25 @@ impl HopController {
                 let late = since_max - self.bottom.vertex_offset_steps();
                 self.on_bottom(late + self.latency_steps);
             } else if p.predict_bottom {
-                // seen ahead: open at the step nearest to the predicted bottom
-                if let Some(ahead) = self.bottom.predicted_vertex_steps(self.step) {
-                    let ahead = ahead - self.latency_steps;
-                    if ahead < 0.5 {
-                        self.on_bottom(-ahead);
-                    }
-                }
+                // seen ahead: the bottom's step, less the latency (acted on in `due_bottom`)
+                self.predicted = self
+                    .bottom
+                    .predicted_vertex_steps(self.step)
+                    .map(|ahead| (self.step, ahead - self.latency_steps));
+            }
+        }
+    }
+
+    /// Every step in compression: open at the step nearest to the predicted bottom (also
+    /// between samples, for a sensor slower than the control rate).
+    fn due_bottom(&mut self) {
+        if self.phase != StancePhase::Compression {
+            return;
+        }
+        if let Some((at, ahead)) = self.predicted {
+            let late = self.step.wrapping_sub(at) as f32 - ahead;
+            if late > -0.5 {
+                self.on_bottom(late);
             }
         }
     }
@@ -391,6 +410,7 @@ impl HopController {
         self.phase = StancePhase::Compression;
         self.liftoff.reset();
         self.bottom = BottomSearch::start(c, self.step);
+        self.predicted = None;
         self.energy_jpkg = self.touchdown_energy();
         let e = if self.energy_jpkg.is_finite() {
             self.energy_jpkg

@@ -22,8 +22,9 @@
 //! - the safe steps by fault code, invalid commands, how the run ended.
 //!
 //! Memory is bounded for any run length: per-cycle records and the timeline are kept only
-//! when asked for (the timeline at most [`MAX_TIMELINE_ROWS`] rows), everything else is a
-//! fixed-size summary.
+//! when asked for (at most [`MAX_CYCLE_RECORDS`] and [`MAX_TIMELINE_ROWS`]), every cycle can
+//! be streamed to a sink instead ([`run_sampled_with`], for traces), and everything else is
+//! a fixed-size summary.
 
 pub mod reference;
 pub mod sensor;
@@ -39,6 +40,7 @@ use super::{HopperError, ThrustLaw};
 use crate::controller::{ControllerError, HilReport, Sil, StepController};
 use dexter_core::hop::{EnergyServoThrust, RaibertThrust, StancePhase};
 use dexter_core::hop_control::{HopController, HopParams, HopThrust};
+use dexter_core::params::ParamError;
 use dexter_core::protocol::Fault;
 use sensor::{
     AtControlSteps, Clock, Delay, GaussianNoise, HopSensor, Latency, NoLatency, NoNoise,
@@ -57,6 +59,9 @@ pub const MAX_SENSOR_RATE_RATIO: f64 = 16.0;
 pub const MAX_PENDING_SAMPLES: f64 = 4096.0;
 /// Most timeline rows kept.
 pub const MAX_TIMELINE_ROWS: usize = 200_000;
+/// Most per-cycle records kept in [`SampledRun::records`] (the first ones; stream them with
+/// [`run_sampled_with`] for longer runs).
+pub const MAX_CYCLE_RECORDS: usize = 1_000_000;
 /// Apex heights reported as `late_apex_heights_m`.
 pub const LATE_APEXES: usize = 8;
 
@@ -161,7 +166,7 @@ pub struct SampledConfig {
     pub settle_tolerance: f64,
     /// Compute the exact-thrust orbit and the fixed-point error.
     pub compare_exact: bool,
-    /// Keep one record per cycle.
+    /// Keep one record per cycle (the first [`MAX_CYCLE_RECORDS`]).
     pub record_cycles: bool,
     /// Keep timeline rows for these cycles.
     pub timeline: Option<TimelineWindow>,
@@ -258,15 +263,45 @@ pub fn controller_params(
         body_height_max_m: (chi_l + 1.0e3) as f32,
         stale_limit_steps: detector.stale_limit_steps,
     };
-    p.validate()
-        .map_err(|e| param("hopper.control", format!(": {e}")))?;
+    p.validate().map_err(control_error)?;
     Ok(p)
+}
+
+/// A rejected controller parameter, named by its scene key.
+fn control_error(e: ParamError) -> SampledError {
+    let name = match e {
+        ParamError::NotFinite(n)
+        | ParamError::NotPositive(n)
+        | ParamError::Negative(n)
+        | ParamError::OutOfRange(n) => n,
+        _ => "",
+    };
+    let key = match name {
+        "dt_s" => "hopper.control.rate_hz",
+        "gravity_mps2" => "hopper.gravity_mps2",
+        "thrust_mps2" | "nominal_thrust_mps2" => "hopper.thrust_tau_mps2",
+        "thrust_duration_s" | "duration_s" => "hopper.thrust_delta_s",
+        "gain_per_m" => "hopper.servo.gain_per_m",
+        "target_energy_jpkg" => "hopper.servo.target_energy_jpkg",
+        "max_thrust_mps2" => "hopper.servo.max_thrust_mps2",
+        "touchdown_compression_m" => "hopper.control.touchdown_compression_m",
+        "liftoff_compression_m" => "hopper.control.liftoff_compression_m",
+        "bottom_hysteresis_m" => "hopper.control.bottom_hysteresis_m",
+        "debounce_samples" => "hopper.control.debounce_samples",
+        "max_compression_m" => "hopper.control.max_compression_m",
+        "stale_limit_steps" => "hopper.control.stale_limit_steps",
+        "sensor_latency_s" => "hopper.sensor.latency_s",
+        "liftoff_height_m" => "hopper.liftoff_height_m",
+        _ => "hopper.control",
+    };
+    param(key, format!("is invalid ({e})"))
 }
 
 impl SampledConfig {
     /// A configuration with the controller's parameters from `law` ([`controller_params`]),
     /// `cycles` hops from an apex at `start_height_m`, at most 60 s per requested cycle plus
-    /// 10 s, period tolerance 1e-3, exact comparison on, nothing recorded.
+    /// 10 s (and at most [`MAX_STEPS`] control steps), period tolerance 1e-3, exact
+    /// comparison on, nothing recorded.
     pub fn new(
         model: ValveModel,
         law: &ThrustLaw,
@@ -283,7 +318,7 @@ impl SampledConfig {
             control,
             sensor,
             cycles,
-            max_time_s: 10.0 + 60.0 * cycles as f64,
+            max_time_s: (10.0 + 60.0 * cycles as f64).min(MAX_STEPS as f64 / rate_hz),
             settle_tolerance: 1e-3,
             compare_exact: true,
             record_cycles: false,
@@ -306,8 +341,7 @@ impl SampledConfig {
         let delta = f64::from(self.control.thrust_duration_s);
         Ok(match self.control.thrust {
             HopThrust::Raibert { thrust_mps2 } => ThrustLaw::Raibert(
-                RaibertThrust::new(f64::from(thrust_mps2), delta)
-                    .map_err(|e| param("hopper.thrust_tau_mps2", format!(": {e}")))?,
+                RaibertThrust::new(f64::from(thrust_mps2), delta).map_err(control_error)?,
             ),
             HopThrust::EnergyServo {
                 nominal_thrust_mps2,
@@ -322,16 +356,14 @@ impl SampledConfig {
                     f64::from(max_thrust_mps2),
                     delta,
                 )
-                .map_err(|e| param("hopper.servo", format!(": {e}")))?,
+                .map_err(control_error)?,
             ),
         })
     }
 
     /// Check every setting; the error names the scene key.
     pub fn validate(&self) -> Result<(), SampledError> {
-        self.control
-            .validate()
-            .map_err(|e| param("hopper.control", format!(": {e}")))?;
+        self.control.validate().map_err(control_error)?;
         let chi_l = self.model.liftoff_m();
         if !(self.start_height_m.is_finite() && self.start_height_m >= chi_l) {
             return Err(param(
@@ -374,6 +406,16 @@ impl SampledConfig {
             return Err(param(
                 "hopper.sensor.rate_hz",
                 format!("must be <= {MAX_SENSOR_RATE_RATIO} x hopper.control.rate_hz"),
+            ));
+        }
+        // a slower sensor repeats its sample for rate_c / rate steps: not stale
+        let repeats = (rate_c / rate * (1.0 - 1e-9)).ceil();
+        if repeats > f64::from(self.control.stale_limit_steps) {
+            return Err(param(
+                "hopper.control.stale_limit_steps",
+                format!(
+                    "must be >= {repeats}: the sensor repeats each sample that many control steps"
+                ),
             ));
         }
         let nonneg = |key, v: f64| {
@@ -553,14 +595,25 @@ pub fn run_sampled(
     cfg: &SampledConfig,
     controller: &mut dyn StepController<HopController>,
 ) -> Result<SampledRun, SampledError> {
+    run_sampled_with(cfg, controller, &mut |_| {})
+}
+
+/// [`run_sampled`], handing every completed cycle to `on_cycle` as it completes (a trace
+/// streamed to disk, whatever the run's length).
+pub fn run_sampled_with(
+    cfg: &SampledConfig,
+    controller: &mut dyn StepController<HopController>,
+    on_cycle: &mut dyn FnMut(&SampledCycle),
+) -> Result<SampledRun, SampledError> {
     cfg.validate()?;
     let s = &cfg.sensor;
     let noisy = s.compression_noise_m > 0.0 || s.height_noise_m > 0.0;
+    let (c, k) = (controller, on_cycle);
     match (s.rate_hz, noisy) {
-        (None, false) => with_quantizer(cfg, controller, AtControlSteps::default(), NoNoise),
-        (None, true) => with_quantizer(cfg, controller, AtControlSteps::default(), noise(s)),
-        (Some(r), false) => with_quantizer(cfg, controller, Periodic::new(r), NoNoise),
-        (Some(r), true) => with_quantizer(cfg, controller, Periodic::new(r), noise(s)),
+        (None, false) => with_quantizer(cfg, c, k, AtControlSteps::default(), NoNoise),
+        (None, true) => with_quantizer(cfg, c, k, AtControlSteps::default(), noise(s)),
+        (Some(r), false) => with_quantizer(cfg, c, k, Periodic::new(r), NoNoise),
+        (Some(r), true) => with_quantizer(cfg, c, k, Periodic::new(r), noise(s)),
     }
 }
 
@@ -568,23 +621,27 @@ fn noise(s: &SensorConfig) -> GaussianNoise {
     GaussianNoise::new(s.compression_noise_m, s.height_noise_m, s.seed)
 }
 
+type Sink<'a> = &'a mut dyn FnMut(&SampledCycle);
+
 fn with_quantizer<C: Clock, N: Noise>(
     cfg: &SampledConfig,
     ctrl: &mut dyn StepController<HopController>,
+    sink: Sink<'_>,
     clock: C,
     noise: N,
 ) -> Result<SampledRun, SampledError> {
     let q = cfg.sensor.quantization_m;
     if q > 0.0 {
-        with_delay(cfg, ctrl, clock, noise, Quantization { step_m: q })
+        with_delay(cfg, ctrl, sink, clock, noise, Quantization { step_m: q })
     } else {
-        with_delay(cfg, ctrl, clock, noise, NoQuantization)
+        with_delay(cfg, ctrl, sink, clock, noise, NoQuantization)
     }
 }
 
 fn with_delay<C: Clock, N: Noise, Q: Quantizer>(
     cfg: &SampledConfig,
     ctrl: &mut dyn StepController<HopController>,
+    sink: Sink<'_>,
     clock: C,
     noise: N,
     quantizer: Q,
@@ -594,10 +651,20 @@ fn with_delay<C: Clock, N: Noise, Q: Quantizer>(
     if s.latency_s > 0.0 {
         let period = 1.0 / s.rate_hz.unwrap_or(1.0 / cfg.dt_s());
         let delay = Latency::new(s.latency_s, period);
-        stepped(cfg, ctrl, HopSensor::new(clock, noise, quantizer, delay, h))
+        stepped(
+            cfg,
+            ctrl,
+            sink,
+            HopSensor::new(clock, noise, quantizer, delay, h),
+        )
     } else {
         let delay = NoLatency::default();
-        stepped(cfg, ctrl, HopSensor::new(clock, noise, quantizer, delay, h))
+        stepped(
+            cfg,
+            ctrl,
+            sink,
+            HopSensor::new(clock, noise, quantizer, delay, h),
+        )
     }
 }
 
@@ -625,12 +692,13 @@ fn true_phase(plant: &ValvePlant) -> StancePhase {
 fn stepped<C: Clock, N: Noise, Q: Quantizer, D: Delay>(
     cfg: &SampledConfig,
     ctrl: &mut dyn StepController<HopController>,
+    sink: Sink<'_>,
     mut sensor: HopSensor<C, N, Q, D>,
 ) -> Result<SampledRun, SampledError> {
     let dt = cfg.dt_s();
     let max_thrust = f64::from(cfg.control.thrust.max_thrust_mps2());
     let mut plant = ValvePlant::new(cfg.model, cfg.start_height_m, 0.0);
-    let mut tr = Tracker::new(cfg);
+    let mut tr = Tracker::new(cfg, sink);
     let mut out = Counters::default();
     let mut end = SampledEnd::TimeLimit;
     'steps: for k in 0..cfg.max_steps() {
@@ -717,7 +785,7 @@ impl Counters {
 
 fn finish(
     cfg: &SampledConfig,
-    tr: Tracker,
+    tr: Tracker<'_>,
     c: Counters,
     end: SampledEnd,
     plant: &ValvePlant,

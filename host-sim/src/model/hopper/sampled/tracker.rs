@@ -4,7 +4,7 @@
 use super::super::valve::TrueEvent;
 use super::sensor::Truth;
 use super::stats::{PhaseDetectionErrors, SETTLE_WINDOW};
-use super::{SampledConfig, TimelineWindow, LATE_APEXES, MAX_TIMELINE_ROWS};
+use super::{SampledConfig, TimelineWindow, LATE_APEXES, MAX_CYCLE_RECORDS, MAX_TIMELINE_ROWS};
 use dexter_core::hop::StancePhase;
 use dexter_core::hop_control::HopCommand;
 use dexter_core::protocol::Mode;
@@ -118,7 +118,8 @@ pub(super) struct Parts {
     pub early_liftoffs: u64,
 }
 
-pub(super) struct Tracker {
+pub(super) struct Tracker<'a> {
+    sink: &'a mut dyn FnMut(&SampledCycle),
     chi_l: f64,
     g: f64,
     delta_s: f64,
@@ -135,9 +136,10 @@ pub(super) struct Tracker {
     last_valve: bool,
 }
 
-impl Tracker {
-    pub fn new(cfg: &SampledConfig) -> Self {
+impl<'a> Tracker<'a> {
+    pub fn new(cfg: &SampledConfig, sink: &'a mut dyn FnMut(&SampledCycle)) -> Self {
         Self {
+            sink,
             chi_l: cfg.model.liftoff_m(),
             g: cfg.model.gravity_mps2(),
             delta_s: f64::from(cfg.control.thrust_duration_s),
@@ -317,27 +319,31 @@ impl Tracker {
         push_capped(&mut self.recent, hop_m, 2 * SETTLE_WINDOW);
         push_capped(&mut self.late, apex.1, LATE_APEXES);
         self.completed += 1;
+        let nan2 = (f64::NAN, f64::NAN);
+        let record = SampledCycle {
+            index: c.index,
+            touchdown_time_s: c.touchdown.0,
+            touchdown_velocity_mps: c.touchdown.1,
+            bottom_time_s: c.bottom.unwrap_or(nan2).0,
+            bottom_height_m: c.bottom.unwrap_or(nan2).1,
+            valve_open_time_s: c.valve_open.unwrap_or(f64::NAN),
+            valve_close_time_s: c.valve_close.unwrap_or(f64::NAN),
+            thrust_mps2: c.thrust,
+            liftoff_time_s: c.liftoff.map_or(f64::NAN, |l| l.0),
+            liftoff_velocity_mps: v_l,
+            apex_time_s: apex.0,
+            apex_height_m: apex.1,
+            next_touchdown_time_s: next_s,
+            detected_touchdown_s: c.touchdowns.first(),
+            detected_bottom_s: c.bottoms.first(),
+            detected_liftoff_s: c.liftoffs.first(),
+            early_liftoff: c.liftoff.is_some_and(|l| l.2),
+        };
+        (self.sink)(&record);
         if let Some(r) = &mut self.records {
-            let nan2 = (f64::NAN, f64::NAN);
-            r.push(SampledCycle {
-                index: c.index,
-                touchdown_time_s: c.touchdown.0,
-                touchdown_velocity_mps: c.touchdown.1,
-                bottom_time_s: c.bottom.unwrap_or(nan2).0,
-                bottom_height_m: c.bottom.unwrap_or(nan2).1,
-                valve_open_time_s: c.valve_open.unwrap_or(f64::NAN),
-                valve_close_time_s: c.valve_close.unwrap_or(f64::NAN),
-                thrust_mps2: c.thrust,
-                liftoff_time_s: c.liftoff.map_or(f64::NAN, |l| l.0),
-                liftoff_velocity_mps: v_l,
-                apex_time_s: apex.0,
-                apex_height_m: apex.1,
-                next_touchdown_time_s: next_s,
-                detected_touchdown_s: c.touchdowns.first(),
-                detected_bottom_s: c.bottoms.first(),
-                detected_liftoff_s: c.liftoffs.first(),
-                early_liftoff: c.liftoff.is_some_and(|l| l.2),
-            });
+            if r.len() < MAX_CYCLE_RECORDS {
+                r.push(record);
+            }
         }
     }
 
