@@ -155,3 +155,29 @@ fn pieces_compose_and_an_open_valve_in_flight_does_nothing() {
     assert_eq!(ev_one.len(), ev_many.len());
     assert!(ev_one.len() >= 3, "{ev_one:?}");
 }
+
+#[test]
+fn a_weak_thrust_that_still_reaches_full_extension_lifts_off() {
+    // 1 mm below chi_l rising at 1 m/s, the valve open with tau = g/2 (net a = -g/2), no
+    // friction: chi reaches chi_l at the smaller root of a/2 t^2 + v t - 1e-3 = 0 and the
+    // leg leaves the ground there, although chi would fall back below chi_l within the span
+    let g = 9.81;
+    let m = LinearSpring::new(0.5, 46.5, 0.0, 0.5 + g / 46.5, 0.0, g).unwrap();
+    let mut p = ValvePlant::in_stance(ValveModel::Linear(m), 0.499, 1.0);
+    p.set_valve(true, 0.5 * g);
+    let ev = events(&mut p, 0.5);
+    let a = -0.5 * g;
+    let t = (-1.0 + (1.0f64 + 2.0 * a * 1e-3).sqrt()) / a;
+    let lift = ev.iter().find_map(|e| match *e {
+        TrueEvent::Liftoff {
+            time_s,
+            during_thrust,
+            ..
+        } => Some((time_s, during_thrust)),
+        _ => None,
+    });
+    let (tl, during) = lift.expect("no liftoff");
+    assert!((tl - t).abs() < 1e-12, "{tl} vs {t}");
+    assert!(during, "an early liftoff, during the thrust");
+    assert!(!p.state().contact || p.state().time_s > 0.2);
+}
