@@ -616,8 +616,20 @@ fn wire_round_trip_of_params_frame_and_command() {
     let mut buf = [0u8; 128];
     let p = params();
     let n = postcard::to_slice(&p, &mut buf).unwrap().len();
-    assert!(n <= 100, "params take {n} bytes");
+    // by hand: 11 f32 (44) + the law's tag and tau (1 + 4) + 3 one-byte fields + the stale
+    // limit 5 as a varint (1) = 53 bytes; the servo's law has 3 more f32: 65
+    assert_eq!(n, 53, "Raibert params take {n} bytes");
     assert_eq!(postcard::from_bytes::<HopParams>(&buf[..n]).unwrap(), p);
+    let servo = HopParams {
+        thrust: HopThrust::EnergyServo {
+            nominal_thrust_mps2: 40.0,
+            gain_per_m: 5.0,
+            target_energy_jpkg: 1.5,
+            max_thrust_mps2: 60.0,
+        },
+        ..p
+    };
+    assert_eq!(postcard::to_slice(&servo, &mut buf).unwrap().len(), 65);
     let f = HopFrame {
         seq: 9,
         leg_compression_m: 0.01,
@@ -626,6 +638,8 @@ fn wire_round_trip_of_params_frame_and_command() {
     };
     let n = postcard::to_slice(&f, &mut buf).unwrap().len();
     assert_eq!(postcard::from_bytes::<HopFrame>(&buf[..n]).unwrap(), f);
+    // seq 9 (1) + f32 (4) + bool (1) + Some(f32) (1 + 4)
+    assert_eq!(n, 11);
     let c = HopCommand {
         seq: 9,
         valve_open: true,
@@ -636,6 +650,8 @@ fn wire_round_trip_of_params_frame_and_command() {
     };
     let n = postcard::to_slice(&c, &mut buf).unwrap().len();
     assert_eq!(postcard::from_bytes::<HopCommand>(&buf[..n]).unwrap(), c);
+    // seq 9 (1) + bool (1) + f32 (4) + phase, mode, fault (1 each)
+    assert_eq!(n, 9);
     let mut d = c;
     d.thrust_mps2 = -d.thrust_mps2;
     assert!(c.bit_identical(&c) && !c.bit_identical(&d));
