@@ -656,3 +656,32 @@ fn wire_round_trip_of_params_frame_and_command() {
     d.thrust_mps2 = -d.thrust_mps2;
     assert!(c.bit_identical(&c) && !c.bit_identical(&d));
 }
+
+#[test]
+fn the_params_build_the_core_law_they_name() {
+    let p = HopParams {
+        thrust: HopThrust::EnergyServo {
+            nominal_thrust_mps2: 40.0,
+            gain_per_m: 5.0,
+            target_energy_jpkg: 2.5,
+            max_thrust_mps2: 60.0,
+        },
+        ..params()
+    };
+    let law = p.thrust_law().unwrap();
+    assert_eq!(
+        (
+            law.nominal_thrust_mps2(),
+            law.gain_per_m(),
+            law.target_energy_jpkg(),
+            law.max_thrust_mps2(),
+            law.duration_s()
+        ),
+        (40.0, 5.0, 2.5, 60.0, 0.02)
+    );
+    assert_eq!(p.thrust.max_thrust_mps2(), 60.0);
+    // Raibert's thrust is a servo without gain: tau whatever the energy
+    let r = params().thrust_law().unwrap();
+    assert_eq!((r.gain_per_m(), r.max_thrust_mps2()), (0.0, 41.86));
+    assert_eq!((r.thrust_mps2(0.0), r.thrust_mps2(1e3)), (41.86, 41.86));
+}
