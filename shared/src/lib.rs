@@ -17,6 +17,7 @@
 //! | [`tilt`] | kappa-tilt law, table-velocity energy feedback, stability limits | Zumel & Erdmann, eq. 3–4, 11, 16, 22–26 |
 //! | [`planar`] | planar juggler mirror law and the modified, solvable law | Rizzi & Koditschek 1994, eq. 11–16 |
 //! | [`hop`] | Raibert's fixed thrust and an energy-servo thrust | Koditschek & Bühler 1991, sec. 1.2, 3.1 |
+//! | [`hop_control`] | the fixed-rate hopper thrust controller: phases from sampled leg compression, valve timing, safe state | Koditschek & Bühler 1991, sec. 3.1, eq. 8/10 |
 //! | [`estimate`] | fixed-rate ball-state estimator with impact re-initialisation | — |
 //! | [`track`] | paddle tracking: PD plus feed-forward within limits | — |
 //! | [`fixed_rate`] | the one shape of every controller: [`FixedRate`](fixed_rate::FixedRate) and [`Reply`](fixed_rate::Reply) | — |
@@ -34,6 +35,7 @@ pub mod echo;
 pub mod estimate;
 pub mod fixed_rate;
 pub mod hop;
+pub mod hop_control;
 pub mod math;
 pub mod mirror;
 pub mod params;
