@@ -29,7 +29,8 @@ fn any_frame() -> impl Strategy<Value = HopFrame> {
             seq,
             leg_compression_m: c,
             contact,
-            body_height_m: h,
+            has_body_height: h.is_some(),
+            body_height_m: h.unwrap_or(f32::NAN),
         })
 }
 
@@ -54,7 +55,8 @@ fn plausible_frames() -> impl Strategy<Value = Vec<HopFrame>> {
                     seq,
                     leg_compression_m: c,
                     contact,
-                    body_height_m: h,
+                    has_body_height: h.is_some(),
+                    body_height_m: h.unwrap_or(f32::NAN),
                 }
             })
             .collect()
@@ -85,7 +87,7 @@ fn check(cmd: &HopCommand, frame: &HopFrame, params: &HopParams) {
         assert_eq!(cmd.thrust_mps2, 0.0);
     }
     let bad =
-        !frame.leg_compression_m.is_finite() || frame.body_height_m.is_some_and(|h| !h.is_finite());
+        !frame.leg_compression_m.is_finite() || frame.body_height().is_some_and(|h| !h.is_finite());
     if bad {
         assert_eq!((cmd.mode, cmd.fault), (Mode::Safe, Fault::NonFinite));
     }
@@ -93,7 +95,7 @@ fn check(cmd: &HopCommand, frame: &HopFrame, params: &HopParams) {
 
 fn servo() -> HopParams {
     HopParams {
-        thrust: HopThrust::EnergyServo {
+        thrust: HopThrust {
             nominal_thrust_mps2: 40.0,
             gain_per_m: 5.0,
             target_energy_jpkg: 1.5,
@@ -152,7 +154,7 @@ proptest! {
             predict_bottom: predict,
             end_thrust_at_estimate: at_estimate,
             sensor_latency_s: latency,
-            thrust: HopThrust::EnergyServo {
+            thrust: HopThrust {
                 nominal_thrust_mps2: 40.0,
                 gain_per_m: gain,
                 target_energy_jpkg: 1.5,

@@ -135,9 +135,21 @@ pub struct HopFrame {
     pub leg_compression_m: f32,
     /// The foot switch: true while the foot touches the ground.
     pub contact: bool,
-    /// Body height chi, m, if the hopper has a height sensor (`None` = no sensor; `Some` of
-    /// a non-finite value is a fault).
-    pub body_height_m: Option<f32>,
+    /// Whether `body_height_m` holds a sample (false: the hopper has no height sensor, or it
+    /// gave none this period).
+    pub has_body_height: bool,
+    /// Body height chi, m, when `has_body_height` (then a non-finite value is a fault);
+    /// ignored otherwise. A flag and a number rather than an `Option`, so that the frame has
+    /// one shape on the wire.
+    pub body_height_m: f32,
+}
+
+impl HopFrame {
+    /// The body-height sample, if the frame carries one.
+    #[inline]
+    pub fn body_height(&self) -> Option<f32> {
+        self.has_body_height.then_some(self.body_height_m)
+    }
 }
 
 /// The controller's output for one control period (held for the period).
@@ -211,6 +223,8 @@ pub struct HopController {
     energy_jpkg: f32,
     last_seq: Option<u32>,
     stale_steps: u16,
+    /// The last two fresh compression samples and their steps (older first), for telemetry.
+    samples: [(f32, u32); 2],
 }
 
 impl HopController {
@@ -242,6 +256,7 @@ impl HopController {
             energy_jpkg: f32::NAN,
             last_seq: None,
             stale_steps: 0,
+            samples: [(0.0, 0); 2],
         })
     }
 
@@ -270,10 +285,26 @@ impl HopController {
         self.stance_thrust_mps2
     }
 
-    /// Telemetry fields the core knows (none specific to the hopper yet; the firmware adds
-    /// timing and link counts).
+    /// Telemetry fields the core knows (the firmware adds timing and link counts): estimate
+    /// slot 0 the last leg compression sample, m; slot 1 its rate, m/s, the difference of
+    /// the last two fresh samples over the time between them (0 before two); slot 2 the
+    /// touchdown energy estimated at the last touchdown, J/kg (0 before the first; the
+    /// phase is in the command). Valid while armed ([`Mode::Track`]). Computed here, not in
+    /// the step, so the step's budget does not pay for it.
     pub fn telemetry(&self) -> Telemetry {
-        Telemetry::default()
+        let [(c0, s0), (c1, s1)] = self.samples;
+        let periods = s1.wrapping_sub(s0);
+        let rate = if periods == 0 {
+            0.0
+        } else {
+            (c1 - c0) / (periods as f32 * self.params.dt_s)
+        };
+        let energy = if self.energy_jpkg.is_finite() {
+            self.energy_jpkg
+        } else {
+            0.0
+        };
+        Telemetry::with_estimate(&[c1, rate, energy], self.armed)
     }
 
     /// One control period: the command for `frame`.
@@ -321,7 +352,7 @@ impl HopController {
     /// the last one (within the stale limit).
     fn check(&mut self, frame: &HopFrame) -> Result<bool, Fault> {
         let c = frame.leg_compression_m;
-        let h = frame.body_height_m;
+        let h = frame.body_height();
         if !c.is_finite() || h.is_some_and(|h| !h.is_finite()) {
             return Err(Fault::NonFinite);
         }
@@ -354,11 +385,13 @@ impl HopController {
     /// A fresh, valid sample: phase detection.
     fn on_sample(&mut self, frame: &HopFrame) {
         let c = frame.leg_compression_m;
+        let [_, last] = self.samples;
+        self.samples = [last, (c, self.step)];
         let p = &self.params;
         let need = p.debounce_samples;
         let up = !frame.contact || c < p.liftoff_compression_m;
         if self.phase == StancePhase::Flight {
-            if let Some(h) = frame.body_height_m {
+            if let Some(h) = frame.body_height() {
                 self.apex_m = self.apex_m.max_r(h);
             }
             // unarmed: a flight seen for `need` samples arms the controller
@@ -486,6 +519,11 @@ impl FixedRate for HopController {
     type Params = HopParams;
     type Frame = HopFrame;
     type Command = HopCommand;
+    /// 300 instructions for every configuration the validator accepts: the step has no
+    /// loop and no call, so the longest path through its compiled code bounds every step
+    /// (module docs, "Work per step"; the static figure and the measured maximum are in
+    /// BENCHMARKS.md, "Hopper controller on the MCU").
+    const STEP_INSTRUCTION_BUDGET: u32 = 300;
 
     fn new(params: HopParams) -> Result<Self, ParamError> {
         HopController::new(params)

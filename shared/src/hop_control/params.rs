@@ -1,6 +1,6 @@
 //! Parameters of the fixed-rate hopper controller and their validation.
 
-use crate::hop::{EnergyServoThrust, RaibertThrust};
+use crate::hop::EnergyServoThrust;
 use crate::params::{finite, non_negative, positive, within, ParamError};
 use serde::{Deserialize, Serialize};
 
@@ -11,38 +11,48 @@ pub const MAX_LATENCY_STEPS: f32 = 1.0e4;
 /// Most consecutive samples a phase transition can be made to wait for.
 pub const MAX_DEBOUNCE_SAMPLES: u8 = 64;
 
-/// The thrust law of each stance (Koditschek & Bühler 1991, sec. 1.2; [`crate::hop`]).
+/// The thrust law of each stance (Koditschek & Bühler 1991, sec. 1.2; [`crate::hop`]): the
+/// energy servo tau_n = clamp(tau0 + k_E (E* - E_n), 0, tau_max) with E_n the touchdown
+/// energy, estimated from the measured flight time ([`EnergyServoThrust`]). Raibert's fixed
+/// thrust ([`RaibertThrust`](crate::hop::RaibertThrust)) is the servo without gain, tau0 = tau_max = tau
+/// ([`HopThrust::raibert`]): one code path in the step.
+///
+/// A struct of four numbers rather than an enum with a variant per law, so that it has one
+/// shape on the wire (every value of it encodes to at most the same 16 bytes).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum HopThrust {
-    /// Raibert's fixed thrust ([`RaibertThrust`]): tau every stance.
-    Raibert {
-        /// tau, thrust force per unit body mass while the valve is open, m/s^2 (>= 0).
-        thrust_mps2: f32,
-    },
-    /// The energy servo ([`EnergyServoThrust`]): tau_n = clamp(tau0 + k_E (E* - E_n), 0,
-    /// tau_max) with E_n the touchdown energy, estimated from the measured flight time.
-    EnergyServo {
-        /// tau0, m/s^2, in [0, tau_max].
-        nominal_thrust_mps2: f32,
-        /// k_E, 1/m (>= 0).
-        gain_per_m: f32,
-        /// E*, J/kg (> 0): the target apex is E*/g above the touchdown height.
-        target_energy_jpkg: f32,
-        /// tau_max, m/s^2 (>= tau0).
-        max_thrust_mps2: f32,
-    },
+pub struct HopThrust {
+    /// tau0, m/s^2, in [0, tau_max] (Raibert's tau).
+    pub nominal_thrust_mps2: f32,
+    /// k_E, 1/m (>= 0; 0 = Raibert's fixed thrust).
+    pub gain_per_m: f32,
+    /// E*, J/kg (> 0): the target apex is E*/g above the touchdown height (no effect when
+    /// `gain_per_m` is 0).
+    pub target_energy_jpkg: f32,
+    /// tau_max, m/s^2 (>= tau0).
+    pub max_thrust_mps2: f32,
 }
 
 impl HopThrust {
+    /// Raibert's fixed thrust: tau every stance (the servo with k_E = 0, tau0 = tau_max =
+    /// tau; E* = 1 J/kg is a placeholder the law multiplies by 0).
+    pub const fn raibert(thrust_mps2: f32) -> Self {
+        Self {
+            nominal_thrust_mps2: thrust_mps2,
+            gain_per_m: 0.0,
+            target_energy_jpkg: 1.0,
+            max_thrust_mps2: thrust_mps2,
+        }
+    }
+
+    /// Whether this is Raibert's fixed thrust (no gain: tau0 every stance).
+    pub fn is_raibert(&self) -> bool {
+        self.gain_per_m == 0.0
+    }
+
     /// The largest thrust this law can command, m/s^2.
     pub fn max_thrust_mps2(&self) -> f32 {
-        match *self {
-            HopThrust::Raibert { thrust_mps2 } => thrust_mps2,
-            HopThrust::EnergyServo {
-                max_thrust_mps2, ..
-            } => max_thrust_mps2,
-        }
+        self.max_thrust_mps2
     }
 }
 
@@ -111,7 +121,7 @@ impl Default for HopParams {
         Self {
             dt_s: 0.001,
             gravity_mps2: 9.81,
-            thrust: HopThrust::Raibert { thrust_mps2: 41.86 },
+            thrust: HopThrust::raibert(41.86),
             thrust_duration_s: 0.05,
             touchdown_compression_m: 0.0,
             liftoff_compression_m: -1.0,
@@ -171,27 +181,36 @@ impl HopParams {
         Ok(())
     }
 
-    /// The core's thrust law for these parameters (validated, named errors).
+    /// The core's thrust law for these parameters (validated, named errors: `thrust.` and
+    /// the field).
     pub fn thrust_law(&self) -> Result<EnergyServoThrust<f32>, ParamError> {
-        let delta = self.thrust_duration_s;
-        match self.thrust {
-            HopThrust::Raibert { thrust_mps2 } => {
-                let r = RaibertThrust::new(thrust_mps2, delta)?;
-                // a servo with no gain is Raibert's thrust: one code path in the step
-                EnergyServoThrust::new(r.thrust_mps2(), 0.0, 1.0, r.thrust_mps2(), delta)
-            }
-            HopThrust::EnergyServo {
-                nominal_thrust_mps2,
-                gain_per_m,
-                target_energy_jpkg,
-                max_thrust_mps2,
-            } => EnergyServoThrust::new(
-                nominal_thrust_mps2,
-                gain_per_m,
-                target_energy_jpkg,
-                max_thrust_mps2,
-                delta,
-            ),
-        }
+        let t = &self.thrust;
+        // tau0 first: it is Raibert's one number
+        non_negative("thrust.nominal_thrust_mps2", t.nominal_thrust_mps2)?;
+        EnergyServoThrust::new(
+            t.nominal_thrust_mps2,
+            t.gain_per_m,
+            t.target_energy_jpkg,
+            t.max_thrust_mps2,
+            self.thrust_duration_s,
+        )
+        .map_err(|e| match e {
+            ParamError::NotFinite(name) => ParamError::NotFinite(thrust_field(name)),
+            ParamError::NotPositive(name) => ParamError::NotPositive(thrust_field(name)),
+            ParamError::Negative(name) => ParamError::Negative(thrust_field(name)),
+            ParamError::OutOfRange(name) => ParamError::OutOfRange(thrust_field(name)),
+        })
+    }
+}
+
+/// The key path of a field of [`HopThrust`] as the servo's validation names it.
+fn thrust_field(name: &'static str) -> &'static str {
+    match name {
+        "nominal_thrust_mps2" => "thrust.nominal_thrust_mps2",
+        "gain_per_m" => "thrust.gain_per_m",
+        "target_energy_jpkg" => "thrust.target_energy_jpkg",
+        "max_thrust_mps2" => "thrust.max_thrust_mps2",
+        "duration_s" => "thrust_duration_s",
+        other => other,
     }
 }

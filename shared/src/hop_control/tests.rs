@@ -102,7 +102,8 @@ fn exact(k: u32, _t: f64, (c, contact, _h): (f64, bool, f64)) -> HopFrame {
         seq: k,
         leg_compression_m: c as f32,
         contact,
-        body_height_m: None,
+        has_body_height: false,
+        body_height_m: 0.0,
     }
 }
 
@@ -295,7 +296,8 @@ fn noisy_samples_do_not_chatter() {
         seq: k,
         leg_compression_m: (x + sigma * noise.next()) as f32,
         contact,
-        body_height_m: None,
+        has_body_height: false,
+        body_height_m: 0.0,
     });
     // touchdowns detected within the 20 s (3 samples of debounce after each)
     let hops = (0..100)
@@ -339,7 +341,8 @@ fn debounce_ignores_a_glitch_shorter_than_its_count_and_delays_by_count_minus_on
         seq: k,
         leg_compression_m: x as f32,
         contact: contact && !glitch(t),
-        body_height_m: None,
+        has_body_height: false,
+        body_height_m: 0.0,
     });
     let dt = 1e-3;
     let first_after = |t: f64| (t / dt).floor() * dt + dt;
@@ -421,7 +424,8 @@ fn first_hop_energy_comes_from_the_body_height_when_there_is_one() {
             seq: k,
             leg_compression_m: x as f32,
             contact,
-            body_height_m: Some(height as f32),
+            has_body_height: true,
+            body_height_m: height as f32,
         });
     }
     // the run starts after the apex (at 0.2003 - T/2 < 0 s), so the highest sample is the
@@ -443,7 +447,7 @@ fn first_hop_energy_comes_from_the_body_height_when_there_is_one() {
 fn servo_thrust_rises_when_the_hop_is_low() {
     // tau = clamp(40 + 5 (2.5 - E), 0, 60): E = 2 (the synthetic hop) -> 42.5 by hand
     let p = HopParams {
-        thrust: HopThrust::EnergyServo {
+        thrust: HopThrust {
             nominal_thrust_mps2: 40.0,
             gain_per_m: 5.0,
             target_energy_jpkg: 2.5,
@@ -479,13 +483,15 @@ fn bad_samples_give_the_safe_state_and_recovery_waits_for_a_flight() {
         seq,
         leg_compression_m: 0.0,
         contact: false,
-        body_height_m: None,
+        has_body_height: false,
+        body_height_m: 0.0,
     };
     let stance = |seq| HopFrame {
         seq,
         leg_compression_m: 0.01,
         contact: true,
-        body_height_m: None,
+        has_body_height: false,
+        body_height_m: 0.0,
     };
     assert_eq!(
         c.step(&stance(0)).mode,
@@ -504,9 +510,10 @@ fn bad_samples_give_the_safe_state_and_recovery_waits_for_a_flight() {
     f.leg_compression_m = 2.0;
     assert_eq!(c.step(&f).fault, Fault::OutOfRange);
     let mut f = ok(3);
-    f.body_height_m = Some(f32::INFINITY);
+    f.has_body_height = true;
+    f.body_height_m = f32::INFINITY;
     assert_eq!(c.step(&f).fault, Fault::NonFinite);
-    f.body_height_m = Some(1e3);
+    f.body_height_m = 1e3;
     assert_eq!(c.step(&f).fault, Fault::OutOfRange);
     // recovers unarmed, arms after a flight sample
     assert_eq!(c.step(&stance(4)).mode, Mode::Hold);
@@ -570,10 +577,10 @@ fn invalid_params_are_named() {
     );
     assert_eq!(
         bad(HopParams {
-            thrust: HopThrust::Raibert { thrust_mps2: -1.0 },
+            thrust: HopThrust::raibert(-1.0),
             ..p
         }),
-        ParamError::Negative("thrust_mps2")
+        ParamError::Negative("thrust.nominal_thrust_mps2")
     );
     assert_eq!(
         bad(HopParams {
@@ -599,7 +606,7 @@ fn invalid_params_are_named() {
     );
     assert_eq!(
         bad(HopParams {
-            thrust: HopThrust::EnergyServo {
+            thrust: HopThrust {
                 nominal_thrust_mps2: 50.0,
                 gain_per_m: 1.0,
                 target_energy_jpkg: 2.0,
@@ -607,7 +614,7 @@ fn invalid_params_are_named() {
             },
             ..p
         }),
-        ParamError::OutOfRange("nominal_thrust_mps2")
+        ParamError::OutOfRange("thrust.nominal_thrust_mps2")
     );
 }
 
@@ -616,12 +623,12 @@ fn wire_round_trip_of_params_frame_and_command() {
     let mut buf = [0u8; 128];
     let p = params();
     let n = postcard::to_slice(&p, &mut buf).unwrap().len();
-    // by hand: 11 f32 (44) + the law's tag and tau (1 + 4) + 3 one-byte fields + the stale
-    // limit 5 as a varint (1) = 53 bytes; the servo's law has 3 more f32: 65
-    assert_eq!(n, 53, "Raibert params take {n} bytes");
+    // by hand: 11 f32 (44) + the law's 4 f32 (16) + 3 one-byte fields + the stale limit 5
+    // as a varint (1) = 64 bytes, whichever law (one shape on the wire)
+    assert_eq!(n, 64, "Raibert params take {n} bytes");
     assert_eq!(postcard::from_bytes::<HopParams>(&buf[..n]).unwrap(), p);
     let servo = HopParams {
-        thrust: HopThrust::EnergyServo {
+        thrust: HopThrust {
             nominal_thrust_mps2: 40.0,
             gain_per_m: 5.0,
             target_energy_jpkg: 1.5,
@@ -629,16 +636,17 @@ fn wire_round_trip_of_params_frame_and_command() {
         },
         ..p
     };
-    assert_eq!(postcard::to_slice(&servo, &mut buf).unwrap().len(), 65);
+    assert_eq!(postcard::to_slice(&servo, &mut buf).unwrap().len(), 64);
     let f = HopFrame {
         seq: 9,
         leg_compression_m: 0.01,
         contact: true,
-        body_height_m: Some(0.4),
+        has_body_height: true,
+        body_height_m: 0.4,
     };
     let n = postcard::to_slice(&f, &mut buf).unwrap().len();
     assert_eq!(postcard::from_bytes::<HopFrame>(&buf[..n]).unwrap(), f);
-    // seq 9 (1) + f32 (4) + bool (1) + Some(f32) (1 + 4)
+    // seq 9 (1) + f32 (4) + bool (1) + bool (1) + f32 (4)
     assert_eq!(n, 11);
     let c = HopCommand {
         seq: 9,
@@ -660,7 +668,7 @@ fn wire_round_trip_of_params_frame_and_command() {
 #[test]
 fn the_params_build_the_core_law_they_name() {
     let p = HopParams {
-        thrust: HopThrust::EnergyServo {
+        thrust: HopThrust {
             nominal_thrust_mps2: 40.0,
             gain_per_m: 5.0,
             target_energy_jpkg: 2.5,

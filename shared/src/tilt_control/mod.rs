@@ -700,16 +700,15 @@ impl<T: SinCos> TiltControllerWith<T> {
         self.pipeline.target
     }
 
-    /// Telemetry fields the core knows: the body's estimated height and vertical velocity
-    /// (in the `ball_*` fields) and whether the estimate is valid.
+    /// Telemetry fields the core knows: estimate slot 0 the body's centre-of-mass height y,
+    /// m, slot 1 its vertical velocity y', m/s, slot 2 its angle theta, rad (latency
+    /// compensated, [`FlightEstimator::now`]); valid while the flight estimate is.
     pub fn telemetry(&self) -> Telemetry {
         let now = self.estimator.now();
-        Telemetry {
-            ball_height_est_m: now.y_m,
-            ball_velocity_est_mps: now.y_dot_mps,
-            estimate_valid: self.estimator.valid(),
-            ..Telemetry::default()
-        }
+        Telemetry::with_estimate(
+            &[now.y_m, now.y_dot_mps, now.theta_rad],
+            self.estimator.valid(),
+        )
     }
 
     /// One control period: the command for `frame`.
@@ -1082,6 +1081,13 @@ impl<T: SinCos> FixedRate for TiltControllerWith<T> {
     type Params = TiltParams;
     type Frame = TiltFrame;
     type Command = TiltCommand;
+    /// 600 instructions with the shipped [`PolySinCos`], for every configuration the
+    /// validator accepts: the step is a fixed set of paths with no loop over data and at
+    /// most one pipeline stage per period (module docs, "Trig and the step budget"); the
+    /// static longest path through the compiled step and its measured maximum are in
+    /// BENCHMARKS.md ("Tilt controller on the MCU"). Other sources are measured against it
+    /// and marked there (libm's `sinf` alone takes ~1350).
+    const STEP_INSTRUCTION_BUDGET: u32 = 600;
 
     fn new(params: TiltParams) -> Result<Self, ParamError> {
         TiltControllerWith::new(params)

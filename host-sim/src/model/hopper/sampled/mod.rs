@@ -233,10 +233,8 @@ pub fn controller_params(
         return Err(param("hopper.control.rate_hz", "must be a number > 0"));
     }
     let thrust = match law {
-        ThrustLaw::Raibert(r) => HopThrust::Raibert {
-            thrust_mps2: r.thrust_mps2() as f32,
-        },
-        ThrustLaw::EnergyServo(s) => HopThrust::EnergyServo {
+        ThrustLaw::Raibert(r) => HopThrust::raibert(r.thrust_mps2() as f32),
+        ThrustLaw::EnergyServo(s) => HopThrust {
             nominal_thrust_mps2: s.nominal_thrust_mps2() as f32,
             gain_per_m: s.gain_per_m() as f32,
             target_energy_jpkg: s.target_energy_jpkg() as f32,
@@ -339,25 +337,24 @@ impl SampledConfig {
     /// The exact simulator's thrust law for the controller's parameters (f64).
     pub fn exact_law(&self) -> Result<ThrustLaw, SampledError> {
         let delta = f64::from(self.control.thrust_duration_s);
-        Ok(match self.control.thrust {
-            HopThrust::Raibert { thrust_mps2 } => ThrustLaw::Raibert(
-                RaibertThrust::new(f64::from(thrust_mps2), delta).map_err(control_error)?,
-            ),
-            HopThrust::EnergyServo {
-                nominal_thrust_mps2,
-                gain_per_m,
-                target_energy_jpkg,
-                max_thrust_mps2,
-            } => ThrustLaw::EnergyServo(
+        let t = self.control.thrust;
+        Ok(if t.is_raibert() {
+            // no gain: tau0 every stance
+            ThrustLaw::Raibert(
+                RaibertThrust::new(f64::from(t.nominal_thrust_mps2), delta)
+                    .map_err(control_error)?,
+            )
+        } else {
+            ThrustLaw::EnergyServo(
                 EnergyServoThrust::new(
-                    f64::from(nominal_thrust_mps2),
-                    f64::from(gain_per_m),
-                    f64::from(target_energy_jpkg),
-                    f64::from(max_thrust_mps2),
+                    f64::from(t.nominal_thrust_mps2),
+                    f64::from(t.gain_per_m),
+                    f64::from(t.target_energy_jpkg),
+                    f64::from(t.max_thrust_mps2),
                     delta,
                 )
                 .map_err(control_error)?,
-            ),
+            )
         })
     }
 

@@ -314,7 +314,12 @@ impl<C: Clock, N: Noise, Q: Quantizer, D: Delay> HopSensor<C, N, Q, D> {
                     seq: m.seq,
                     leg_compression_m: m.compression_m as f32,
                     contact: m.contact,
-                    body_height_m: self.body_height.then_some(m.height_m as f32),
+                    has_body_height: self.body_height,
+                    body_height_m: if self.body_height {
+                        m.height_m as f32
+                    } else {
+                        0.0
+                    },
                 },
                 Some(m),
             ),
@@ -350,7 +355,7 @@ mod tests {
             assert_eq!(f.seq, k);
             assert_eq!(f.leg_compression_m, (0.01 * k as f64) as f32);
             assert_eq!(f.contact, k > 0);
-            assert_eq!(f.body_height_m, Some((0.5 - 0.01 * k as f64) as f32));
+            assert_eq!(f.body_height(), Some((0.5 - 0.01 * k as f64) as f32));
         }
         assert_eq!(std::mem::size_of::<NoNoise>(), 0);
         assert_eq!(std::mem::size_of::<NoQuantization>(), 0);
@@ -376,7 +381,7 @@ mod tests {
             (f64::from(f.leg_compression_m) - 0.071).abs() < 1e-7,
             "{f:?}"
         );
-        assert_eq!(f.body_height_m, None);
+        assert_eq!(f.body_height(), None);
         // noise: sample spread matches sigma
         let mut n = GaussianNoise::new(2e-3, 0.0, 3);
         let xs: Vec<f64> = (0..20_000).map(|_| n.perturb(0.0, 1.0).0).collect();
