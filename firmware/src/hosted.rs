@@ -104,9 +104,25 @@ macro_rules! hosted {
     };
 }
 
+/// The tilt controller this image hosts: the shipped [`TiltController`] (polynomial sine and
+/// cosine), or with the feature `tilt-backend-sincos` (a measurement build, see
+/// firmware/Cargo.toml) the one with the math backend's (libm, or micromath with
+/// `fast-math`), to measure what accuracy costs on the target.
+///
+/// [`TiltController`]: dexter_core::tilt_control::TiltController
+#[cfg(not(feature = "tilt-backend-sincos"))]
+type HostedTilt = dexter_core::tilt_control::TiltController;
+#[cfg(feature = "tilt-backend-sincos")]
+type HostedTilt =
+    dexter_core::tilt_control::TiltControllerWith<dexter_core::tilt_control::sincos::BackendSinCos>;
+
 hosted! {
     /// The line juggler (mirror law, estimator, paddle tracker).
     Line(dexter_core::control::Controller),
     /// The link check (echoes a scaled value).
     Echo(dexter_core::echo::Echo),
+    /// The kappa-tilt table with energy feedback.
+    Tilt(HostedTilt),
+    /// The hopper's thrust valve.
+    Hop(dexter_core::hop_control::HopController),
 }

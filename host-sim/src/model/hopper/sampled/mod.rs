@@ -277,11 +277,13 @@ fn control_error(e: ParamError) -> SampledError {
     let key = match name {
         "dt_s" => "hopper.control.rate_hz",
         "gravity_mps2" => "hopper.gravity_mps2",
-        "thrust_mps2" | "nominal_thrust_mps2" => "hopper.thrust_tau_mps2",
+        "thrust_mps2" | "nominal_thrust_mps2" | "thrust.nominal_thrust_mps2" => {
+            "hopper.thrust_tau_mps2"
+        }
         "thrust_duration_s" | "duration_s" => "hopper.thrust_delta_s",
-        "gain_per_m" => "hopper.servo.gain_per_m",
-        "target_energy_jpkg" => "hopper.servo.target_energy_jpkg",
-        "max_thrust_mps2" => "hopper.servo.max_thrust_mps2",
+        "gain_per_m" | "thrust.gain_per_m" => "hopper.servo.gain_per_m",
+        "target_energy_jpkg" | "thrust.target_energy_jpkg" => "hopper.servo.target_energy_jpkg",
+        "max_thrust_mps2" | "thrust.max_thrust_mps2" => "hopper.servo.max_thrust_mps2",
         "touchdown_compression_m" => "hopper.control.touchdown_compression_m",
         "liftoff_compression_m" => "hopper.control.liftoff_compression_m",
         "bottom_hysteresis_m" => "hopper.control.bottom_hysteresis_m",
