@@ -308,6 +308,7 @@ impl HopController {
     }
 
     /// One control period: the command for `frame`.
+    #[inline(never)]
     pub fn step(&mut self, frame: &HopFrame) -> HopCommand {
         self.step = self.step.wrapping_add(1);
         match self.check(frame) {
@@ -324,6 +325,7 @@ impl HopController {
 
     /// The safe command for an external fault (e.g. the firmware's link timeout); one
     /// control period passes.
+    #[inline(never)]
     pub fn safe(&mut self, seq: u32, fault: Fault) -> HopCommand {
         self.step = self.step.wrapping_add(1);
         self.enter_safe(seq, fault)

@@ -712,6 +712,7 @@ impl<T: SinCos> TiltControllerWith<T> {
     }
 
     /// One control period: the command for `frame`.
+    #[inline(never)]
     pub fn step(&mut self, frame: &TiltFrame) -> TiltCommand {
         match self.check(frame) {
             Err(fault) => self.safe(frame.seq, fault),
@@ -732,6 +733,7 @@ impl<T: SinCos> TiltControllerWith<T> {
 
     /// The safe command for an external fault: both axes brake to rest from their last
     /// known state (dead-reckoned), the estimator is reset.
+    #[inline(never)]
     pub fn safe(&mut self, seq: u32, fault: Fault) -> TiltCommand {
         self.estimator.reset();
         self.pipeline.restart();
@@ -1098,11 +1100,11 @@ impl<T: SinCos> FixedRate for TiltControllerWith<T> {
     }
 
     fn step(&mut self, frame: &TiltFrame) -> TiltCommand {
-        TiltControllerWith::step(self, frame)
+        T::step(self, frame)
     }
 
     fn safe(&mut self, seq: u32, fault: Fault) -> TiltCommand {
-        TiltControllerWith::safe(self, seq, fault)
+        T::safe(self, seq, fault)
     }
 
     fn telemetry(&self) -> Telemetry {

@@ -7,14 +7,46 @@
 //! default `libm` backend cannot meet the step budget; under `fast-math` it is micromath's
 //! (~1e-3 absolute error).
 
+use super::{TiltCommand, TiltControllerWith, TiltFrame};
 use crate::math::{cos_poly_f32, sin_cos_poly_f32, sin_poly_f32, Real};
+use crate::protocol::Fault;
 
 /// A sine/cosine pair, f32, for an angle in rad.
-pub trait SinCos {
+pub trait SinCos: Sized {
     /// Short name for reports (`"poly"`, `"libm"`, `"micromath"`, `"poly-separate"`).
     const NAME: &'static str;
     /// (sin x, cos x).
     fn sin_cos(x_rad: f32) -> (f32, f32);
+
+    /// `controller.step(frame)`, what [`FixedRate::step`](crate::fixed_rate::FixedRate::step)
+    /// runs. The sources of this module define it in their own impls (the same body as this
+    /// default): a non-generic function is compiled in the crate that defines it, so the
+    /// step of each core source is compiled here, with the core's optimisation level,
+    /// whichever crate calls it. The firmware builds its own code for size and the core
+    /// for speed (`Cargo.toml`, profile sections); a generic step would be compiled in the
+    /// firmware crate, for size, and miss its instruction budget.
+    fn step(controller: &mut TiltControllerWith<Self>, frame: &TiltFrame) -> TiltCommand {
+        controller.step(frame)
+    }
+
+    /// `controller.safe(seq, fault)`, what [`FixedRate::safe`](crate::fixed_rate::FixedRate::safe)
+    /// runs (see [`SinCos::step`] for why the core's sources define it).
+    fn safe(controller: &mut TiltControllerWith<Self>, seq: u32, fault: Fault) -> TiltCommand {
+        controller.safe(seq, fault)
+    }
+}
+
+/// The step and the safe command of the tilt controller with a source of this module,
+/// compiled in this crate (see [`SinCos::step`]).
+macro_rules! compiled_in_the_core {
+    () => {
+        fn step(controller: &mut TiltControllerWith<Self>, frame: &TiltFrame) -> TiltCommand {
+            controller.step(frame)
+        }
+        fn safe(controller: &mut TiltControllerWith<Self>, seq: u32, fault: Fault) -> TiltCommand {
+            controller.safe(seq, fault)
+        }
+    };
 }
 
 /// The shipped pair: [`sin_cos_poly_f32`], one range reduction and two short polynomials
@@ -28,6 +60,7 @@ impl SinCos for PolySinCos {
     fn sin_cos(x_rad: f32) -> (f32, f32) {
         sin_cos_poly_f32(x_rad)
     }
+    compiled_in_the_core!();
 }
 
 /// The compile-time math backend ([`crate::math::BACKEND`]): libm by default, micromath with
@@ -41,6 +74,7 @@ impl SinCos for BackendSinCos {
     fn sin_cos(x_rad: f32) -> (f32, f32) {
         (Real::sin(x_rad), Real::cos(x_rad))
     }
+    compiled_in_the_core!();
 }
 
 /// The core's separate polynomials [`sin_poly_f32`] and [`cos_poly_f32`] (two range
@@ -54,4 +88,5 @@ impl SinCos for SeparatePolySinCos {
     fn sin_cos(x_rad: f32) -> (f32, f32) {
         (sin_poly_f32(x_rad), cos_poly_f32(x_rad))
     }
+    compiled_in_the_core!();
 }
