@@ -50,6 +50,17 @@ fn safe_as<C: Wire, T: StepTimer>(
     (C::command(command), instructions)
 }
 
+/// A controller of kind `C` from `params`, or the error naming the first invalid one.
+///
+/// Not inlined, and generic, so that each kind's constructor and validation (cold code,
+/// `#[inline]` in the core) are compiled here, once, with the firmware's size-optimised
+/// profile (`Cargo.toml`), rather than with the core's speed-optimised one or into every
+/// caller.
+#[inline(never)]
+fn configure_as<C: Wire>(params: &C::Params) -> Result<C, ParamError> {
+    C::new(*params)
+}
+
 /// `Hosted`: one variant per hosted controller, and its dispatch.
 macro_rules! hosted {
     ($($(#[$doc:meta])* $name:ident($controller:ty)),+ $(,)?) => {
@@ -63,7 +74,7 @@ macro_rules! hosted {
             /// kind, else the controller or the error naming its first invalid parameter.
             pub fn configure(config: &Config) -> Option<Result<Self, ParamError>> {
                 $(if let Some(params) = <$controller as Wire>::params_of(config) {
-                    return Some(<$controller as FixedRate>::new(*params).map(Hosted::$name));
+                    return Some(configure_as::<$controller>(params).map(Hosted::$name));
                 })+
                 None
             }

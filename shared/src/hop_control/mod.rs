@@ -229,6 +229,7 @@ pub struct HopController {
 
 impl HopController {
     /// A controller; the error names the first invalid parameter.
+    #[inline]
     pub fn new(params: HopParams) -> Result<Self, ParamError> {
         params.validate()?;
         let law = params.thrust_law()?;
@@ -527,6 +528,7 @@ impl FixedRate for HopController {
     /// BENCHMARKS.md, "Hopper controller on the MCU").
     const STEP_INSTRUCTION_BUDGET: u32 = 300;
 
+    #[inline]
     fn new(params: HopParams) -> Result<Self, ParamError> {
         HopController::new(params)
     }

@@ -141,6 +141,7 @@ impl Default for HopParams {
 
 impl HopParams {
     /// Check every field; the error names the first bad one.
+    #[inline]
     pub fn validate(&self) -> Result<(), ParamError> {
         within("dt_s", positive("dt_s", self.dt_s)?, 0.0, 1.0)?;
         positive("gravity_mps2", self.gravity_mps2)?;
@@ -181,12 +182,20 @@ impl HopParams {
         Ok(())
     }
 
-    /// The core's thrust law for these parameters (validated, named errors: `thrust.` and
-    /// the field).
+    /// The core's thrust law for these parameters; the error names the first invalid
+    /// field of [`HopThrust`] (`thrust.` and the field) or `thrust_duration_s`.
+    #[inline]
     pub fn thrust_law(&self) -> Result<EnergyServoThrust<f32>, ParamError> {
         let t = &self.thrust;
-        // tau0 first: it is Raibert's one number
-        non_negative("thrust.nominal_thrust_mps2", t.nominal_thrust_mps2)?;
+        // each field by its own key, tau0 first (Raibert's one number); then the law's own
+        // checks cannot fail
+        let tau0 = non_negative("thrust.nominal_thrust_mps2", t.nominal_thrust_mps2)?;
+        if tau0 > non_negative("thrust.max_thrust_mps2", t.max_thrust_mps2)? {
+            return Err(ParamError::OutOfRange("thrust.nominal_thrust_mps2"));
+        }
+        non_negative("thrust.gain_per_m", t.gain_per_m)?;
+        positive("thrust.target_energy_jpkg", t.target_energy_jpkg)?;
+        non_negative("thrust_duration_s", self.thrust_duration_s)?;
         EnergyServoThrust::new(
             t.nominal_thrust_mps2,
             t.gain_per_m,
@@ -194,23 +203,5 @@ impl HopParams {
             t.max_thrust_mps2,
             self.thrust_duration_s,
         )
-        .map_err(|e| match e {
-            ParamError::NotFinite(name) => ParamError::NotFinite(thrust_field(name)),
-            ParamError::NotPositive(name) => ParamError::NotPositive(thrust_field(name)),
-            ParamError::Negative(name) => ParamError::Negative(thrust_field(name)),
-            ParamError::OutOfRange(name) => ParamError::OutOfRange(thrust_field(name)),
-        })
-    }
-}
-
-/// The key path of a field of [`HopThrust`] as the servo's validation names it.
-fn thrust_field(name: &'static str) -> &'static str {
-    match name {
-        "nominal_thrust_mps2" => "thrust.nominal_thrust_mps2",
-        "gain_per_m" => "thrust.gain_per_m",
-        "target_energy_jpkg" => "thrust.target_energy_jpkg",
-        "max_thrust_mps2" => "thrust.max_thrust_mps2",
-        "duration_s" => "thrust_duration_s",
-        other => other,
     }
 }

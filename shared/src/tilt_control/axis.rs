@@ -79,8 +79,14 @@ impl Axis {
     /// Advance the reference one period under the held acceleration `a_ff` (exact).
     #[inline]
     pub fn advance(&mut self, a_ff: f32, dt: f32) {
-        self.p += (self.v + 0.5 * a_ff * dt) * dt;
-        self.v += a_ff * dt;
+        (self.p, self.v) = self.advanced(a_ff, dt);
+    }
+
+    /// The reference (position, velocity) one period on under the held acceleration
+    /// `a_ff` (exact), without moving it.
+    #[inline]
+    pub fn advanced(&self, a_ff: f32, dt: f32) -> (f32, f32) {
+        (self.p + (self.v + 0.5 * a_ff * dt) * dt, self.v + a_ff * dt)
     }
 
     /// The feed-forward that brings the reference velocity to rest within the limit.

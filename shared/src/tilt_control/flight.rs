@@ -30,7 +30,8 @@
 //! `reinit_after` times in a row: an unplanned or mistimed impact), the filter restarts from
 //! the measurements (n = 1). So impacts are predicted by the model and detected from the
 //! measurements. The sample of the period in which the model applies an impact is not used
-//! (one sample per flight), so that period does the impact instead of the update.
+//! (one sample per flight), so that period does the impact instead of the update; also when
+//! the model finds the contact not closing (then the flight carries on unchanged).
 //!
 //! # Latency
 //!
@@ -112,6 +113,7 @@ impl Default for FlightTuning {
 
 impl FlightTuning {
     /// Check every field; the error names the first bad one.
+    #[inline]
     pub fn validate(&self) -> Result<(), ParamError> {
         non_negative("estimator.latency_s", self.latency_s)?;
         if self.latency_s >= 0.1 {
@@ -242,6 +244,7 @@ pub struct FlightEstimator {
 
 impl FlightEstimator {
     /// An estimator stepped every `dt_s` (> 0) under gravity `gravity_mps2` (> 0).
+    #[inline]
     pub fn new(
         tuning: FlightTuning,
         model: ImpactModel,
@@ -251,7 +254,19 @@ impl FlightEstimator {
         tuning.validate()?;
         positive("dt_s", dt_s)?;
         positive("gravity_mps2", gravity_mps2)?;
-        Ok(Self {
+        Ok(Self::new_validated(tuning, model, dt_s, gravity_mps2))
+    }
+
+    /// [`FlightEstimator::new`] for values the caller has validated (the controller's
+    /// parameters: validated once, not twice in flash).
+    #[inline]
+    pub(crate) fn new_validated(
+        tuning: FlightTuning,
+        model: ImpactModel,
+        dt_s: f32,
+        gravity_mps2: f32,
+    ) -> Self {
+        Self {
             tuning,
             model,
             dt_s,
@@ -261,7 +276,7 @@ impl FlightEstimator {
             since_sample: 0,
             outliers: 0,
             planned: NO_PLAN,
-        })
+        }
     }
 
     /// Forget everything (after a fault).
@@ -336,17 +351,22 @@ impl FlightEstimator {
                 restarted: true,
             };
         }
-        let (mut pred, impact) = self.predict(span);
-        if impact {
-            // the period's sample is not used: it keeps the impact period's work bounded
-            // (the impact model replaces the update), at the cost of one sample per flight
-            self.state = pred;
+        if self.planned.in_s < span {
+            // the period's sample is not used, whether the contact closes or not: the impact
+            // model replaces the update, so the period's work is bounded by the larger of
+            // the two, not their sum (the step budget's static argument), at the cost of
+            // one sample per flight
+            let impact = self.impact(span);
             self.outliers = 0;
             return FlightUpdate {
                 impact,
                 restarted: false,
             };
         }
+        // no plan inside the span: infinity stays infinity
+        self.planned.in_s -= span;
+        let mut pred = self.state.flown(span, self.gravity_mps2);
+        let impact = false;
         let r = [zx - pred.x_m, zy - pred.y_m, zt - pred.theta_rad];
         let t = &self.tuning;
         if r[0].abs() <= t.gate_m && r[1].abs() <= t.gate_m && r[2].abs() <= t.gate_rad {
@@ -384,31 +404,28 @@ impl FlightEstimator {
         }
     }
 
-    /// The state flown over `span`, through the planned impact if it falls inside.
-    fn predict(&mut self, span: f32) -> (BodyFlight, bool) {
+    /// The state flown over `span` through the planned impact, which falls inside it;
+    /// whether the contact closed (eq. 2/21 applied) or not (flight carries on). The plan
+    /// is used up either way.
+    fn impact(&mut self, span: f32) -> bool {
         let g = self.gravity_mps2;
         let p = self.planned;
-        if p.in_s < span {
-            let t_c = p.in_s.max_r(0.0);
-            let mut s = self.state.flown(t_c, g);
-            // sin and cos of the angle now from the plan's, rotated by the small
-            // difference d (|d| ~ 1e-3 rad: second-order error d^2/2 ~ 1e-6)
-            let d = s.theta_rad - p.theta_rad;
-            let sc = (p.sin_theta + d * p.cos_theta, p.cos_theta - d * p.sin_theta);
-            let hit =
-                self.model
-                    .collide(&mut s, sc, p.sin_alpha, p.cos_alpha, p.normal_velocity_mps);
-            self.planned = NO_PLAN;
-            if hit {
-                let prior = u16::from(self.tuning.impact_prior_samples);
-                self.samples = self.samples.min(prior);
-            }
-            (s.flown(span - t_c, g), hit)
-        } else {
-            // no plan: infinity stays infinity
-            self.planned.in_s = p.in_s - span;
-            (self.state.flown(span, g), false)
+        let t_c = p.in_s.max_r(0.0);
+        let mut s = self.state.flown(t_c, g);
+        // sin and cos of the angle now from the plan's, rotated by the small difference d
+        // (|d| ~ 1e-3 rad: second-order error d^2/2 ~ 1e-6)
+        let d = s.theta_rad - p.theta_rad;
+        let sc = (p.sin_theta + d * p.cos_theta, p.cos_theta - d * p.sin_theta);
+        let hit = self
+            .model
+            .collide(&mut s, sc, p.sin_alpha, p.cos_alpha, p.normal_velocity_mps);
+        self.planned = NO_PLAN;
+        if hit {
+            let prior = u16::from(self.tuning.impact_prior_samples);
+            self.samples = self.samples.min(prior);
         }
+        self.state = s.flown(span - t_c, g);
+        hit
     }
 
     /// Start a new fit at the measured pose (velocities follow from the next sample).

@@ -253,6 +253,7 @@ impl Default for TiltParams {
 }
 
 impl TiltAxisParams {
+    #[inline]
     fn limits(&self) -> AxisLimits {
         AxisLimits {
             min: self.min_rad,
@@ -262,6 +263,7 @@ impl TiltAxisParams {
         }
     }
 
+    #[inline]
     fn validate(&self) -> Result<(), ParamError> {
         within(
             "tilt.min_rad",
@@ -288,6 +290,7 @@ impl TiltAxisParams {
 }
 
 impl StrokeAxisParams {
+    #[inline]
     fn limits(&self) -> AxisLimits {
         AxisLimits {
             min: self.min_m,
@@ -297,6 +300,7 @@ impl StrokeAxisParams {
         }
     }
 
+    #[inline]
     fn validate(&self) -> Result<(), ParamError> {
         finite("stroke.min_m", self.min_m)?;
         finite("stroke.max_m", self.max_m)?;
@@ -321,6 +325,7 @@ impl TiltParams {
     }
 
     /// Check every field; the error names the first bad one.
+    #[inline]
     pub fn validate(&self) -> Result<(), ParamError> {
         within("dt_s", self.dt_s, f32::MIN_POSITIVE, 0.02)?;
         positive("gravity_mps2", self.gravity_mps2)?;
@@ -482,38 +487,41 @@ struct Active {
     status: PlanStatus,
 }
 
-/// The frame's plausible ranges, precomputed from the parameters.
+/// The frame's plausible ranges, precomputed from the parameters: each two-sided range
+/// [lo, hi] as its centre and half-width, so that one comparison checks it,
+/// |v - (lo + hi)/2| <= (hi - lo)/2 (the same range up to the rounding of the centre and
+/// half-width: a relative 6e-8 of the range).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Bounds {
     x_max: f32,
-    y_min: f32,
-    y_max: f32,
+    y_mid: f32,
+    y_half: f32,
     theta_max: f32,
-    tilt_min: f32,
-    tilt_max: f32,
+    tilt_mid: f32,
+    tilt_half: f32,
     rate_max: f32,
-    stroke_min: f32,
-    stroke_max: f32,
+    stroke_mid: f32,
+    stroke_half: f32,
     velocity_max: f32,
 }
 
 impl Bounds {
     /// Poses within the camera's plausible box; table values within their travel plus 5 %
     /// of it, rates within twice their limits.
+    #[inline]
     fn new(p: &TiltParams) -> Self {
         let (t, s) = (&p.tilt, &p.stroke);
-        let tilt_margin = 0.05 * (t.max_rad - t.min_rad);
-        let stroke_margin = 0.05 * (s.max_m - s.min_m);
+        // the travel plus 5 % of it on each side: half-width 0.55 of the travel
         Self {
             x_max: p.x_max_m,
-            y_min: p.y_min_m,
-            y_max: p.y_max_m,
+            y_mid: 0.5 * (p.y_min_m + p.y_max_m),
+            y_half: 0.5 * (p.y_max_m - p.y_min_m),
             theta_max: p.theta_max_rad,
-            tilt_min: t.min_rad - tilt_margin,
-            tilt_max: t.max_rad + tilt_margin,
+            tilt_mid: 0.5 * (t.min_rad + t.max_rad),
+            tilt_half: 0.55 * (t.max_rad - t.min_rad),
             rate_max: 2.0 * t.rate_max_radps,
-            stroke_min: s.min_m - stroke_margin,
-            stroke_max: s.max_m + stroke_margin,
+            stroke_mid: 0.5 * (s.min_m + s.max_m),
+            stroke_half: 0.55 * (s.max_m - s.min_m),
             velocity_max: 2.0 * s.velocity_max_mps,
         }
     }
@@ -522,14 +530,11 @@ impl Bounds {
     #[inline]
     fn contain(&self, f: &TiltFrame) -> bool {
         f.body_x_m.abs() <= self.x_max
-            && f.body_y_m >= self.y_min
-            && f.body_y_m <= self.y_max
+            && (f.body_y_m - self.y_mid).abs() <= self.y_half
             && f.body_theta_rad.abs() <= self.theta_max
-            && f.table_angle_rad >= self.tilt_min
-            && f.table_angle_rad <= self.tilt_max
+            && (f.table_angle_rad - self.tilt_mid).abs() <= self.tilt_half
             && f.table_rate_radps.abs() <= self.rate_max
-            && f.table_height_m >= self.stroke_min
-            && f.table_height_m <= self.stroke_max
+            && (f.table_height_m - self.stroke_mid).abs() <= self.stroke_half
             && f.table_velocity_mps.abs() <= self.velocity_max
     }
 }
@@ -630,6 +635,7 @@ pub struct TiltControllerWith<T: SinCos> {
 
 impl<T: SinCos> TiltControllerWith<T> {
     /// A controller; the error names the first invalid parameter.
+    #[inline]
     pub fn new(params: TiltParams) -> Result<Self, ParamError> {
         params.validate()?;
         let p = &params;
@@ -662,7 +668,8 @@ impl<T: SinCos> TiltControllerWith<T> {
             params,
             law,
             geo: ContactGeometry::new(p.gravity_mps2, p.l_m),
-            estimator: FlightEstimator::new(p.estimator, model, p.dt_s, p.gravity_mps2)?,
+            // validated with the rest of the parameters above
+            estimator: FlightEstimator::new_validated(p.estimator, model, p.dt_s, p.gravity_mps2),
             tilt,
             stroke,
             bounds: Bounds::new(p),
@@ -716,18 +723,7 @@ impl<T: SinCos> TiltControllerWith<T> {
     pub fn step(&mut self, frame: &TiltFrame) -> TiltCommand {
         match self.check(frame) {
             Err(fault) => self.safe(frame.seq, fault),
-            Ok(fresh) => {
-                let cmd = self.track(frame, fresh);
-                // one test for three values: the sum of finite values is finite unless it
-                // overflows (beyond 1e38: not a plan either)
-                if (cmd.tilt_ref_rad + cmd.stroke_ref_m + cmd.impact_in_s).is_finite() {
-                    cmd
-                } else {
-                    // an internal value overflowed (not expected for validated input):
-                    // never send it
-                    self.safe(frame.seq, Fault::NonFinite)
-                }
-            }
+            Ok(fresh) => self.track(frame, fresh),
         }
     }
 
@@ -765,7 +761,14 @@ impl<T: SinCos> TiltControllerWith<T> {
         }
     }
 
-    /// A valid frame: estimate, one pipeline stage, feed-forward, track.
+    /// A valid frame: estimate, one pipeline stage, feed-forward, track. Before the axis
+    /// commands, the command's fields that come from the controller's own state (the next
+    /// references and the time to the impact) are checked to be finite (not expected to
+    /// fail for validated input: a guard against an overflow inside); if one is not, the
+    /// command is the safe state ([`Fault::NonFinite`]) instead of the axis commands, so
+    /// the step's longest path holds one of the two, not both. The accelerations are
+    /// finite in any case: [`axis::Axis::command`] clamps them into the limits, NaN
+    /// included.
     fn track(&mut self, frame: &TiltFrame, fresh: bool) -> TiltCommand {
         let dt = self.params.dt_s;
         let tilt_m = PaddleState::new(frame.table_angle_rad, frame.table_rate_radps);
@@ -782,12 +785,13 @@ impl<T: SinCos> TiltControllerWith<T> {
                 self.stroke.v = stroke_m.velocity_mps;
                 self.active = None;
                 self.pipeline.restart();
-            }
-            self.mode = Mode::Track;
-            if update.impact || update.restarted {
+                self.mode = Mode::Track;
+            } else if update.impact || update.restarted {
                 // the impact model ran (or the fit restarted) this period: no stage
                 self.pipeline.restart();
             } else {
+                // the first period in Track runs none either: each branch here does one
+                // of the three, so the step's longest path holds one (static bound)
                 self.run_stage();
             }
             self.feed_forward()
@@ -802,16 +806,23 @@ impl<T: SinCos> TiltControllerWith<T> {
             ([0.0, 0.0], PlanStatus::Idle, 0.0)
         };
         let [ff_t, ff_s] = ff;
+        let (tilt_next, stroke_next) =
+            (self.tilt.advanced(ff_t, dt), self.stroke.advanced(ff_s, dt));
+        // one test for three values: the sum of finite values is finite unless it
+        // overflows (beyond 1e38: not a plan either)
+        if !(tilt_next.0 + stroke_next.0 + impact_in_s).is_finite() {
+            return self.safe(frame.seq, Fault::NonFinite);
+        }
         let (ut, sat_t) = self.tilt.command(ff_t, &tilt_m, dt);
         let (us, sat_s) = self.stroke.command(ff_s, &stroke_m, dt);
-        self.tilt.advance(ff_t, dt);
-        self.stroke.advance(ff_s, dt);
+        (self.tilt.p, self.tilt.v) = tilt_next;
+        (self.stroke.p, self.stroke.v) = stroke_next;
         TiltCommand {
             seq: frame.seq,
             tilt_accel_radps2: ut,
             stroke_accel_mps2: us,
-            tilt_ref_rad: self.tilt.p,
-            stroke_ref_m: self.stroke.p,
+            tilt_ref_rad: tilt_next.0,
+            stroke_ref_m: stroke_next.0,
             impact_in_s,
             mode: self.mode,
             fault: Fault::None,
@@ -832,33 +843,28 @@ impl<T: SinCos> TiltControllerWith<T> {
     fn feed_forward(&mut self) -> ([f32; 2], PlanStatus, f32) {
         let dt = self.params.dt_s;
         let window = self.params.estimator.latency_s + 2.0 * dt;
-        let Some(a) = self.active.as_mut() else {
-            let status = if self.unreachable {
-                PlanStatus::Unreachable
-            } else {
-                PlanStatus::Idle
-            };
-            let ff = [
-                self.tilt.brake_reference(dt),
-                self.stroke.brake_reference(dt),
-            ];
-            return (ff, status, 0.0);
+        // without a plan, or past its impact window: brake the references (one code path)
+        let (status, impact_in_s) = match self.active.as_mut() {
+            Some(a) => {
+                let t = a.elapsed_s;
+                a.elapsed_s = t + dt;
+                let [(a0t, jt), (a0s, js)] = a.ff;
+                if t < a.tau_s {
+                    let tm = t + 0.5 * dt;
+                    return ([a0t + jt * tm, a0s + js * tm], a.status, a.tau_s - t);
+                } else if t < a.tau_s + window {
+                    return ([0.0, 0.0], a.status, a.tau_s - t);
+                }
+                (a.status, a.tau_s - t)
+            }
+            None if self.unreachable => (PlanStatus::Unreachable, 0.0),
+            None => (PlanStatus::Idle, 0.0),
         };
-        let t = a.elapsed_s;
-        a.elapsed_s = t + dt;
-        let [(a0t, jt), (a0s, js)] = a.ff;
-        let ff = if t < a.tau_s {
-            let tm = t + 0.5 * dt;
-            [a0t + jt * tm, a0s + js * tm]
-        } else if t < a.tau_s + window {
-            [0.0, 0.0]
-        } else {
-            [
-                self.tilt.brake_reference(dt),
-                self.stroke.brake_reference(dt),
-            ]
-        };
-        (ff, a.status, a.tau_s - t)
+        let ff = [
+            self.tilt.brake_reference(dt),
+            self.stroke.brake_reference(dt),
+        ];
+        (ff, status, impact_in_s)
     }
 
     /// One stage of the planning pipeline (module docs).
@@ -1009,8 +1015,10 @@ impl<T: SinCos> TiltControllerWith<T> {
         }
     }
 
-    /// Check the committed plan against one axis's limits (k: tilt dynamics, tilt travel,
-    /// stroke dynamics, stroke travel).
+    /// Check the committed plan's profile against one axis's speed and acceleration limits
+    /// (k: 0 tilt, 1 stroke; [`Cubic::within_dynamics`]). The travel is not checked ahead:
+    /// the tracker keeps each axis within its travel (its stopping-distance bound on the
+    /// velocity) and reports `Limited` when that bound binds.
     fn check_committed(&mut self, k: u8) {
         let p = &mut self.pipeline;
         let [tilt, stroke] = p.committed;
@@ -1019,16 +1027,15 @@ impl<T: SinCos> TiltControllerWith<T> {
             return;
         };
         let tau = a.tau_s;
-        let ok = match k {
-            0 => tilt.within_dynamics(tau, &self.tilt.limits),
-            1 => tilt.within_travel(tau, &self.tilt.limits),
-            2 => stroke.within_dynamics(tau, &self.stroke.limits),
-            _ => stroke.within_travel(tau, &self.stroke.limits),
+        let ok = if k == 0 {
+            tilt.within_dynamics(tau, &self.tilt.limits)
+        } else {
+            stroke.within_dynamics(tau, &self.stroke.limits)
         };
         if !ok {
             a.status = PlanStatus::Limited;
         }
-        p.stage = if k >= 3 {
+        p.stage = if k >= 1 {
             Stage::Wait
         } else {
             Stage::Check(k + 1)
@@ -1091,6 +1098,7 @@ impl<T: SinCos> FixedRate for TiltControllerWith<T> {
     /// and marked there (libm's `sinf` alone takes ~1350).
     const STEP_INSTRUCTION_BUDGET: u32 = 600;
 
+    #[inline]
     fn new(params: TiltParams) -> Result<Self, ParamError> {
         TiltControllerWith::new(params)
     }
