@@ -558,9 +558,7 @@ enum Stage {
     Motion,
     /// Both cubics from the references now; commit when the impact is close.
     Apply,
-    /// The committed plan's limits, one check per period.
-    Check(u8),
-    /// Committed and checked: nothing until the impact.
+    /// Committed: nothing until the impact.
     Wait,
 }
 
@@ -578,8 +576,6 @@ struct Pipeline {
     body: BodyAtImpact,
     angle: TableAngle,
     target: ImpactTarget,
-    /// The committed cubics (tilt, stroke) for the checks.
-    committed: [Cubic; 2],
 }
 
 impl Pipeline {
@@ -594,7 +590,6 @@ impl Pipeline {
             body: BodyAtImpact::default(),
             angle: TableAngle::default(),
             target: ImpactTarget::default(),
-            committed: [Cubic::default(); 2],
         }
     }
 
@@ -912,7 +907,6 @@ impl<T: SinCos> TiltControllerWith<T> {
                 p.stage = Stage::Apply;
             }
             Stage::Apply => self.apply(),
-            Stage::Check(k) => self.check_committed(k),
             Stage::Wait => {
                 // the estimator applies the impact one latency after its time; far past
                 // that the plan was missed: plan afresh
@@ -1007,39 +1001,11 @@ impl<T: SinCos> TiltControllerWith<T> {
         });
         p.guess_s = p.pred.time_s;
         if committed {
-            p.committed = [tilt, stroke];
-            p.stage = Stage::Check(0);
+            p.stage = Stage::Wait;
         } else {
             // the periods to the next snapshot count from the snapshot
             p.stage = Stage::Snapshot;
         }
-    }
-
-    /// Check the committed plan's profile against one axis's speed and acceleration limits
-    /// (k: 0 tilt, 1 stroke; [`Cubic::within_dynamics`]). The travel is not checked ahead:
-    /// the tracker keeps each axis within its travel (its stopping-distance bound on the
-    /// velocity) and reports `Limited` when that bound binds.
-    fn check_committed(&mut self, k: u8) {
-        let p = &mut self.pipeline;
-        let [tilt, stroke] = p.committed;
-        let Some(a) = self.active.as_mut() else {
-            p.stage = Stage::Wait;
-            return;
-        };
-        let tau = a.tau_s;
-        let ok = if k == 0 {
-            tilt.within_dynamics(tau, &self.tilt.limits)
-        } else {
-            stroke.within_dynamics(tau, &self.stroke.limits)
-        };
-        if !ok {
-            a.status = PlanStatus::Limited;
-        }
-        p.stage = if k >= 1 {
-            Stage::Wait
-        } else {
-            Stage::Check(k + 1)
-        };
     }
 
     /// Validate a frame; `Ok(true)` if it carries a new camera sample, `Ok(false)` if it

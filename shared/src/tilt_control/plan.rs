@@ -258,9 +258,7 @@ impl Cubic {
     }
 
     /// Acceleration (linear: extremes at the ends) and velocity (a quadratic: ends and
-    /// vertex) within `lim` on [0, tau]; one division. (Not inlined: checked for both
-    /// axes, one copy in flash.)
-    #[inline(never)]
+    /// vertex) within `lim` on [0, tau]; one division.
     pub fn within_dynamics(&self, tau: f32, lim: &AxisLimits) -> bool {
         let (a0, a1) = (2.0 * self.c2, 2.0 * self.c2 + 6.0 * self.c3 * tau);
         let mut ok = a0.abs() <= lim.accel_max && a1.abs() <= lim.accel_max;
