@@ -56,12 +56,13 @@ impl HopThrust {
     }
 }
 
-/// Everything the hopper controller needs, SI units, f32 (sent over the wire in HIL).
+/// Everything the hopper controller needs, SI units, f32 (sent over the wire in HIL). Its
+/// serde form is its fields as one flat tuple (`tilt_control::fields`).
 ///
 /// Sensor convention: `leg_compression_m` is chi_l minus the leg length, m (0 with the leg
 /// fully extended, positive in stance; in stance with the foot at height 0 the body height
 /// is chi = chi_l - compression).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct HopParams {
     /// Control period dt, s (> 0, <= 1).
@@ -203,5 +204,74 @@ impl HopParams {
             t.max_thrust_mps2,
             self.thrust_duration_s,
         )
+    }
+}
+
+impl crate::tilt_control::fields::Fields for HopParams {
+    const COUNT: usize = 20;
+    const NAME: &'static str = "HopParams";
+
+    fn blank() -> Self {
+        Self {
+            dt_s: 0.0,
+            gravity_mps2: 0.0,
+            thrust: HopThrust::raibert(0.0),
+            thrust_duration_s: 0.0,
+            touchdown_compression_m: 0.0,
+            liftoff_compression_m: 0.0,
+            bottom_hysteresis_m: 0.0,
+            debounce_samples: 0,
+            predict_bottom: false,
+            end_thrust_at_estimate: false,
+            sensor_latency_s: 0.0,
+            max_compression_m: 0.0,
+            liftoff_height_m: 0.0,
+            body_height_min_m: 0.0,
+            body_height_max_m: 0.0,
+            stale_limit_steps: 0,
+        }
+    }
+
+    fn fields<V: crate::tilt_control::fields::FieldVisit>(&mut self, v: &mut V) {
+        let t = &mut self.thrust;
+        for x in [
+            &mut self.dt_s,
+            &mut self.gravity_mps2,
+            &mut t.nominal_thrust_mps2,
+            &mut t.gain_per_m,
+            &mut t.target_energy_jpkg,
+            &mut t.max_thrust_mps2,
+            &mut self.thrust_duration_s,
+            &mut self.touchdown_compression_m,
+            &mut self.liftoff_compression_m,
+            &mut self.bottom_hysteresis_m,
+        ] {
+            v.f32(x);
+        }
+        v.u8(&mut self.debounce_samples);
+        v.bool(&mut self.predict_bottom);
+        v.bool(&mut self.end_thrust_at_estimate);
+        for x in [
+            &mut self.sensor_latency_s,
+            &mut self.max_compression_m,
+            &mut self.liftoff_height_m,
+            &mut self.body_height_min_m,
+            &mut self.body_height_max_m,
+        ] {
+            v.f32(x);
+        }
+        v.u16(&mut self.stale_limit_steps);
+    }
+}
+
+impl Serialize for HopParams {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        crate::tilt_control::fields::serialize(self, s)
+    }
+}
+
+impl<'de> Deserialize<'de> for HopParams {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        crate::tilt_control::fields::deserialize(d)
     }
 }

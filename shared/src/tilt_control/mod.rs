@@ -79,6 +79,7 @@
 
 pub mod axis;
 pub mod contact;
+pub(crate) mod fields;
 pub mod flight;
 pub mod plan;
 pub mod sincos;
@@ -90,6 +91,7 @@ use crate::protocol::{Fault, Mode, Telemetry};
 use crate::state::PaddleState;
 use crate::tilt::{EnergyFeedback, TiltLaw};
 use axis::Axis;
+
 use contact::{
     ContactGeometry, ContactInput, ContactPrediction, ContactSolver, MAX_CONTACT_ITERATIONS,
 };
@@ -147,8 +149,8 @@ pub struct StrokeAxisParams {
 }
 
 /// Everything a tilt controller needs, SI units, f32 (sent over the wire in HIL; about 135
-/// bytes postcard-encoded).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// bytes postcard-encoded). Its serde form is its fields as one flat tuple ([`fields`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TiltParams {
     /// Control period, s (> 0, <= 0.02).
@@ -374,6 +376,137 @@ impl TiltParams {
             return Err(ParamError::NotPositive("stale_limit_steps"));
         }
         Ok(())
+    }
+}
+
+impl fields::Fields for TiltParams {
+    const COUNT: usize = 38;
+    const NAME: &'static str = "TiltParams";
+
+    fn blank() -> Self {
+        let axis = AxisLimitsBlank::ZERO;
+        Self {
+            dt_s: 0.0,
+            gravity_mps2: 0.0,
+            rho_m: 0.0,
+            l_m: 0.0,
+            restitution: 0.0,
+            kappa: 0.0,
+            kappa_e_s2pm2: 0.0,
+            kappa_rate_s: 0.0,
+            target_apex_m: 0.0,
+            impact_height_m: 0.0,
+            tilt: axis.tilt,
+            stroke: axis.stroke,
+            estimator: FlightTuning::default(),
+            commit_s: 0.0,
+            x_max_m: 0.0,
+            y_min_m: 0.0,
+            y_max_m: 0.0,
+            theta_max_rad: 0.0,
+            contact_iterations: 0,
+            stale_limit_steps: 0,
+        }
+    }
+
+    fn fields<V: fields::FieldVisit>(&mut self, v: &mut V) {
+        for x in [
+            &mut self.dt_s,
+            &mut self.gravity_mps2,
+            &mut self.rho_m,
+            &mut self.l_m,
+            &mut self.restitution,
+            &mut self.kappa,
+            &mut self.kappa_e_s2pm2,
+            &mut self.kappa_rate_s,
+            &mut self.target_apex_m,
+            &mut self.impact_height_m,
+        ] {
+            v.f32(x);
+        }
+        let (t, s) = (&mut self.tilt, &mut self.stroke);
+        for x in [
+            &mut t.min_rad,
+            &mut t.max_rad,
+            &mut t.rate_max_radps,
+            &mut t.accel_max_radps2,
+            &mut t.kp_per_s2,
+            &mut t.kd_per_s,
+            &mut t.home_rad,
+            &mut s.min_m,
+            &mut s.max_m,
+            &mut s.velocity_max_mps,
+            &mut s.accel_max_mps2,
+            &mut s.kp_per_s2,
+            &mut s.kd_per_s,
+            &mut s.home_m,
+        ] {
+            v.f32(x);
+        }
+        let e = &mut self.estimator;
+        for x in [&mut e.latency_s, &mut e.gate_m, &mut e.gate_rad] {
+            v.f32(x);
+        }
+        v.u16(&mut e.memory_samples);
+        for x in [
+            &mut e.settle_samples,
+            &mut e.impact_prior_samples,
+            &mut e.reinit_after,
+        ] {
+            v.u8(x);
+        }
+        for x in [
+            &mut self.commit_s,
+            &mut self.x_max_m,
+            &mut self.y_min_m,
+            &mut self.y_max_m,
+            &mut self.theta_max_rad,
+        ] {
+            v.f32(x);
+        }
+        v.u8(&mut self.contact_iterations);
+        v.u16(&mut self.stale_limit_steps);
+    }
+}
+
+/// Zero axes for [`fields::Fields::blank`].
+struct AxisLimitsBlank {
+    tilt: TiltAxisParams,
+    stroke: StrokeAxisParams,
+}
+
+impl AxisLimitsBlank {
+    const ZERO: Self = Self {
+        tilt: TiltAxisParams {
+            min_rad: 0.0,
+            max_rad: 0.0,
+            rate_max_radps: 0.0,
+            accel_max_radps2: 0.0,
+            kp_per_s2: 0.0,
+            kd_per_s: 0.0,
+            home_rad: 0.0,
+        },
+        stroke: StrokeAxisParams {
+            min_m: 0.0,
+            max_m: 0.0,
+            velocity_max_mps: 0.0,
+            accel_max_mps2: 0.0,
+            kp_per_s2: 0.0,
+            kd_per_s: 0.0,
+            home_m: 0.0,
+        },
+    };
+}
+
+impl Serialize for TiltParams {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        fields::serialize(self, s)
+    }
+}
+
+impl<'de> Deserialize<'de> for TiltParams {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        fields::deserialize(d)
     }
 }
 
