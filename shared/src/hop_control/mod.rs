@@ -124,8 +124,9 @@ use crate::params::ParamError;
 use crate::protocol::{Fault, Mode, Telemetry};
 use serde::{Deserialize, Serialize};
 
-/// One sample of the hopper, sent to the controller every control period.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// One sample of the hopper, sent to the controller every control period. Its serde form
+/// is its fields as one flat tuple (`tilt_control::fields`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct HopFrame {
     /// Sample sequence number; a controller that sees it not advance counts the input stale.
@@ -149,6 +150,35 @@ impl HopFrame {
     #[inline]
     pub fn body_height(&self) -> Option<f32> {
         self.has_body_height.then_some(self.body_height_m)
+    }
+}
+
+impl crate::tilt_control::fields::Fields for HopFrame {
+    const COUNT: usize = 5;
+    const NAME: &'static str = "HopFrame";
+
+    fn blank() -> Self {
+        Self::default()
+    }
+
+    fn fields<V: crate::tilt_control::fields::FieldVisit>(&mut self, v: &mut V) {
+        v.u32(&mut self.seq);
+        v.f32(&mut self.leg_compression_m);
+        v.bool(&mut self.contact);
+        v.bool(&mut self.has_body_height);
+        v.f32(&mut self.body_height_m);
+    }
+}
+
+impl Serialize for HopFrame {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        crate::tilt_control::fields::serialize(self, s)
+    }
+}
+
+impl<'de> Deserialize<'de> for HopFrame {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        crate::tilt_control::fields::deserialize(d)
     }
 }
 

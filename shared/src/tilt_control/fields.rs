@@ -23,6 +23,8 @@ pub(crate) trait FieldVisit {
     fn u8(&mut self, value: &mut u8);
     /// A u16 field.
     fn u16(&mut self, value: &mut u16);
+    /// A u32 field.
+    fn u32(&mut self, value: &mut u32);
     /// A bool field.
     fn bool(&mut self, value: &mut bool);
 }
@@ -52,6 +54,9 @@ impl FieldVisit for Count {
         self.0 += 1;
     }
     fn u16(&mut self, _: &mut u16) {
+        self.0 += 1;
+    }
+    fn u32(&mut self, _: &mut u32) {
         self.0 += 1;
     }
     fn bool(&mut self, _: &mut bool) {
@@ -95,6 +100,9 @@ impl<'de, A: SeqAccess<'de>> FieldVisit for Reader<'_, 'de, A> {
         self.next(value);
     }
     fn u16(&mut self, value: &mut u16) {
+        self.next(value);
+    }
+    fn u32(&mut self, value: &mut u32) {
         self.next(value);
     }
     fn bool(&mut self, value: &mut bool) {
@@ -158,6 +166,9 @@ impl<T: SerializeTuple> FieldVisit for Writer<T> {
         self.put(value);
     }
     fn u16(&mut self, value: &mut u16) {
+        self.put(value);
+    }
+    fn u32(&mut self, value: &mut u32) {
         self.put(value);
     }
     fn bool(&mut self, value: &mut bool) {

@@ -511,7 +511,8 @@ impl<'de> Deserialize<'de> for TiltParams {
 }
 
 /// One sample of the plant: the camera's newest pose of the body and the table's encoders.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// Its serde form is its fields as one flat tuple ([`fields`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TiltFrame {
     /// Sequence number of the camera sample; a controller that sees it not advance counts
@@ -531,6 +532,42 @@ pub struct TiltFrame {
     pub table_height_m: f32,
     /// Pivot vertical velocity, m/s (the stroke drive's velocity estimate).
     pub table_velocity_mps: f32,
+}
+
+impl fields::Fields for TiltFrame {
+    const COUNT: usize = 8;
+    const NAME: &'static str = "TiltFrame";
+
+    fn blank() -> Self {
+        Self::default()
+    }
+
+    fn fields<V: fields::FieldVisit>(&mut self, v: &mut V) {
+        v.u32(&mut self.seq);
+        for x in [
+            &mut self.body_x_m,
+            &mut self.body_y_m,
+            &mut self.body_theta_rad,
+            &mut self.table_angle_rad,
+            &mut self.table_rate_radps,
+            &mut self.table_height_m,
+            &mut self.table_velocity_mps,
+        ] {
+            v.f32(x);
+        }
+    }
+}
+
+impl Serialize for TiltFrame {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        fields::serialize(self, s)
+    }
+}
+
+impl<'de> Deserialize<'de> for TiltFrame {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        fields::deserialize(d)
+    }
 }
 
 /// How the table's plan stands (a command field: every limitation is reported).
