@@ -2,6 +2,11 @@
 //! it), through a copy in `OUT_DIR`. (It is not at the workspace root: rustc links with the
 //! workspace root as its working directory, where the linker would find it first.)
 //!
+//! The search path is a link argument of this package's binaries only
+//! (`rustc-link-arg-bins`), not a `rustc-link-search` (which cargo hands on to every crate
+//! that depends on this one): a board crate that links the library (e.g.
+//! `boards/nucleo-f446re`) brings its own `memory.x`, and must not find this one.
+//!
 //! `memory.x` cuts flash to the product's 32 KiB budget, so the linker refuses an image
 //! that does not fit. The `bench` feature builds a measurement tool, not the product (it
 //! links the math kernels under test, libm's `sinf` among them, ~36 KiB): for it alone the
@@ -22,7 +27,7 @@ fn main() {
     }
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("set by cargo"));
     std::fs::write(out.join("memory.x"), memory).expect("write memory.x to OUT_DIR");
-    println!("cargo:rustc-link-search={}", out.display());
+    println!("cargo:rustc-link-arg-bins=-L{}", out.display());
     println!("cargo:rerun-if-changed={}", source.display());
     println!("cargo:rerun-if-changed=build.rs");
 }

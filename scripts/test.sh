@@ -21,6 +21,17 @@ for comp in rustfmt clippy; do
     rustup component add "$comp" || die "missing $comp: run 'rustup component add $comp'"
   fi
 done
+command -v python3 >/dev/null || die "python3 not found (the static worst-case tool scripts/wcet.py needs it): install Python 3"
+if ! command -v llvm-objdump >/dev/null \
+   && ! find "$(rustc --print sysroot)/lib/rustlib" -name llvm-objdump 2>/dev/null | grep -q .; then
+  step "installing llvm-objdump for scripts/wcet.py (rustup component add llvm-tools, else Debian's llvm)"
+  rustup component add llvm-tools 2>/dev/null \
+    || { [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null \
+         && apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq llvm >/dev/null; } \
+    || { command -v sudo >/dev/null && command -v apt-get >/dev/null \
+         && sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq llvm >/dev/null; } \
+    || die "llvm-objdump not found: run 'rustup component add llvm-tools' or 'sudo apt-get install llvm'"
+fi
 
 if ! command -v qemu-system-arm >/dev/null; then
   if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
@@ -43,6 +54,7 @@ cargo fmt --all -- --check
 step "lints (cargo clippy -D warnings), host crates and firmware"
 cargo clippy --all-targets -- -D warnings
 cargo clippy -p dexter-firmware --target "$TARGET" -- -D warnings
+cargo clippy -p dexter-nucleo-f446re --target "$TARGET" -- -D warnings
 
 step "the core builds for $TARGET with each math backend"
 cargo build -p dexter-core --target "$TARGET"
@@ -51,7 +63,16 @@ cargo build -p dexter-core --target "$TARGET" --features fast-math
 step "the firmware builds for $TARGET (release)"
 cargo build -p dexter-firmware --release --target "$TARGET"
 
-step "unit, property, paper-reproduction and HIL tests (cargo test)"
+step "static worst-case control steps, from the firmware as flashed (scripts/wcet.py)"
+python3 scripts/wcet_test.py
+FW="target/$TARGET/release/dexter-firmware"
+# 297 = the line juggler's 300-instruction goal less the 3 the HIL measurement window adds
+python3 scripts/wcet.py "$FW" dexter_core::control::Controller::step --max-instructions 297
+
+step "the NUCLEO-F446RE image builds for $TARGET (release); its sizes are checked by tests/board.rs"
+cargo build -p dexter-nucleo-f446re --release --target "$TARGET"
+
+step "unit, property, paper-reproduction, driver (embedded-hal-mock), HIL and board-size tests (cargo test)"
 cargo test --all-targets
 
 step "documentation builds without warnings"

@@ -1290,6 +1290,30 @@ fn dropping_the_lockstep_kills_qemu() {
     );
 }
 
+/// SIGSTOP takes effect asynchronously, thread by thread (late on a loaded machine): wait
+/// until every thread of `pid` is in the stopped state `T` before relying on its silence.
+fn wait_until_stopped(pid: u32) {
+    let all_stopped = || -> bool {
+        let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+            return false;
+        };
+        tasks.flatten().all(|t| {
+            std::fs::read_to_string(t.path().join("stat"))
+                .ok()
+                .and_then(|s| s.rsplit_once(") ").map(|(_, rest)| rest.starts_with('T')))
+                .unwrap_or(false)
+        })
+    };
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while !all_stopped() {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "QEMU (pid {pid}) did not stop within 10 s of SIGSTOP"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
 #[test]
 fn a_silent_firmware_is_a_link_timeout_with_a_clear_message() {
     let params = ControllerParams::default();
@@ -1305,6 +1329,7 @@ fn a_silent_firmware_is_a_link_timeout_with_a_clear_message() {
         .status()
         .unwrap();
     assert!(stopped.success());
+    wait_until_stopped(pid);
     let err = hil
         .step(&SensorFrame {
             seq: 0,

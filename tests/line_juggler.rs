@@ -151,13 +151,14 @@ fn realistic_line_juggler_converges_within_one_percent() {
 
 #[test]
 fn sweep_over_kappa1_period_doubles_where_beta_v2_passes_one() {
-    use dexter_sim::sweep::{sweep, Range};
+    use dexter_sim::scene::SceneFile;
+    use dexter_sim::sweep::Range;
+    use dexter_sim::systems::line::sweep::sweep;
     let sets = [dexter_sim::scene::parse_set("stop.impacts=600").unwrap()];
-    let table = dexter_sim::scene::load_table(
-        &dexter_tests::scenes_dir().join("line-juggler-chaotic.toml"),
-        &sets,
-    )
-    .unwrap();
+    let table = SceneFile::read(&dexter_tests::scenes_dir().join("line-juggler-chaotic.toml"))
+        .unwrap()
+        .table_with(&sets)
+        .unwrap();
     // beta v*^2 = 0.9 * kappa1 * 19.62 crosses 1 at kappa1 = 0.05663
     let range = Range::parse("control.kappa1_s2pm2=0.04:0.06:3").unwrap();
     let points = sweep(&table, &range, 8).unwrap();

@@ -65,6 +65,11 @@ fn configure_as<C: Wire>(params: &C::Params) -> Result<C, ParamError> {
 macro_rules! hosted {
     ($($(#[$doc:meta])* $name:ident($controller:ty)),+ $(,)?) => {
         /// A configured controller of one of the kinds this image hosts.
+        ///
+        /// Its variants differ in size by design: there is no heap to box the large ones
+        /// into, and the server holds exactly one `Hosted` in static RAM, sized by the
+        /// largest kind (the linker's RAM budget checks it).
+        #[allow(clippy::large_enum_variant)]
         pub enum Hosted {
             $($(#[$doc])* $name($controller),)+
         }

@@ -6,14 +6,14 @@
 //! controllers it hosts ([`hosted`]), the smoke run ([`smoke`]), the stack measurement
 //! ([`stack`]) and the math benchmarks (`bench`, feature `bench`) — is board independent.
 //!
-//! This file holds what every binary needs (knurling app-template style): the defmt global
-//! logger (semihosting), the panic handler and a `HardFault` handler that both end a QEMU
-//! run with a failure status, and [`exit`].
+//! This library holds no global singletons: the defmt global logger, the panic handler and
+//! the `HardFault` handler belong to each binary (knurling app-template style), because they
+//! differ per board: the QEMU image (`src/main.rs`) logs over semihosting and ends the run
+//! with an exit status; a real board (`boards/nucleo-f446re`) logs over RTT (`defmt-rtt`)
+//! and uses `panic-probe`. Linking this library therefore pulls in neither.
 #![no_std]
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
-
-use defmt_semihosting as _; // global logger: defmt frames on semihosting stdout
 
 #[cfg(feature = "bench")]
 pub mod bench;
@@ -24,40 +24,3 @@ pub mod ring;
 pub mod server;
 pub mod smoke;
 pub mod stack;
-
-/// End the run: semihosting `SYS_EXIT` (QEMU exits with status 0 on success, 1 on failure).
-/// On a real board without a debugger attached this parks the core instead.
-pub fn exit(success: bool) -> ! {
-    use cortex_m_semihosting::debug;
-    debug::exit(if success {
-        debug::EXIT_SUCCESS
-    } else {
-        debug::EXIT_FAILURE
-    });
-    loop {
-        cortex_m::asm::bkpt();
-    }
-}
-
-/// A panic logs its location and ends the run with a failure status.
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    match info.location() {
-        Some(l) => defmt::error!("panic at {=str}:{=u32}", l.file(), l.line()),
-        None => defmt::error!("panic"),
-    }
-    exit(false)
-}
-
-/// defmt's own panics (e.g. `defmt::unwrap!`) go through the same path.
-#[defmt::panic_handler]
-fn defmt_panic() -> ! {
-    exit(false)
-}
-
-/// A HardFault ends the run with a failure status instead of spinning.
-#[cortex_m_rt::exception]
-unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    defmt::error!("HardFault at pc={=u32:#010x}", frame.pc());
-    exit(false)
-}

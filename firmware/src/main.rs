@@ -3,13 +3,21 @@
 //! - `semihosting`: lock-step server on the semihosting file link;
 //! - `uart`: lock-step server on UART0;
 //! - `freerun`: free-running fixed-rate mode on UART0 (500 Hz on SysTick, link timeout
-//!   after 5 periods without a valid frame), the loop a real board runs;
+//!   after 5 periods without a valid frame): a board fed sensor frames over its link;
 //! - `fault-panic`, `fault-hardfault`, `fault-stack-overflow`: test hooks that panic,
 //!   execute `udf`, or recurse past the reserved stack, to check that each ends the QEMU run
 //!   with a failure status;
 //! - `bench` (feature `bench`): per-call instruction counts of the math kernels.
+//!
+//! This binary also holds what a QEMU run needs once (knurling app-template style): the
+//! defmt global logger (semihosting stdout), the panic handler and a `HardFault` handler
+//! that both end the run with a failure status, and [`exit`]. The library
+//! (`dexter_firmware`) holds none of them, so a real board links its own (RTT, panic-probe).
 #![no_std]
 #![no_main]
+#![deny(unsafe_op_in_unsafe_fn)]
+
+use defmt_semihosting as _; // global logger: defmt frames on semihosting stdout
 
 use cortex_m::peripheral::SYST;
 use cortex_m_rt::{entry, exception};
@@ -21,7 +29,7 @@ use dexter_firmware::server::{Exit, FreeRunning, Server};
 const FREE_RUNNING_RATE_HZ: u32 = 500;
 /// Periods without a valid sensor frame before the free-running mode's safe state.
 const FREE_RUNNING_TIMEOUT_PERIODS: u32 = 5;
-use dexter_firmware::{exit, smoke};
+use dexter_firmware::smoke;
 
 /// The plant links this board offers, as one type so the server is compiled once.
 enum PlantLink {
@@ -180,4 +188,40 @@ fn recurse(depth: u32) -> u32 {
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
     mps2_an386::on_interrupt(irqn);
+}
+
+/// End the run: semihosting `SYS_EXIT` (QEMU exits with status 0 on success, 1 on failure).
+fn exit(success: bool) -> ! {
+    use cortex_m_semihosting::debug;
+    debug::exit(if success {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    loop {
+        cortex_m::asm::bkpt();
+    }
+}
+
+/// A panic logs its location and ends the run with a failure status.
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    match info.location() {
+        Some(l) => defmt::error!("panic at {=str}:{=u32}", l.file(), l.line()),
+        None => defmt::error!("panic"),
+    }
+    exit(false)
+}
+
+/// defmt's own panics (e.g. `defmt::unwrap!`) go through the same path.
+#[defmt::panic_handler]
+fn defmt_panic() -> ! {
+    exit(false)
+}
+
+/// A HardFault ends the run with a failure status instead of spinning.
+#[exception]
+unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    defmt::error!("HardFault at pc={=u32:#010x}", frame.pc());
+    exit(false)
 }

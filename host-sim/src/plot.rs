@@ -21,21 +21,23 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use image::codecs::png::PngEncoder;
+use image::{ColorType, ImageEncoder};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
-use crate::trace::ImpactRow;
+use crate::systems::line::trace::ImpactRow;
 
 /// Width and height, in pixels, of every plot (the PNG's size and the SVG's view box).
 pub const PLOT_SIZE: (u32, u32) = (1024, 768);
 
-const FONT: &str = "sans-serif";
-const TITLE_SIZE: u32 = 30;
+pub(crate) const FONT: &str = "sans-serif";
+pub(crate) const TITLE_SIZE: u32 = 30;
 const AXIS_DESC_SIZE: u32 = 22;
-const TICK_LABEL_SIZE: u32 = 17;
-const LEGEND_SIZE: u32 = 18;
+pub(crate) const TICK_LABEL_SIZE: u32 = 17;
+pub(crate) const LEGEND_SIZE: u32 = 18;
 
 /// What went wrong while making a plot.
 #[derive(Debug)]
@@ -167,6 +169,87 @@ pub fn series(
     render(&fig, dir, stem)
 }
 
+/// A [`series`] plot being put together: a title, axis labels (with units) and named
+/// series, each in the palette's next colour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chart {
+    title: String,
+    x_label: String,
+    y_label: String,
+    series: Vec<Series>,
+}
+
+impl Chart {
+    /// An empty chart.
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+    ) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            series: Vec::new(),
+        }
+    }
+
+    /// Add a series drawn as a dot per point.
+    pub fn dots(self, label: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        self.with(label, points, Style::Dots)
+    }
+
+    /// Add a series drawn as a line through its points.
+    pub fn line(self, label: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        self.with(label, points, Style::Line)
+    }
+
+    fn with(mut self, label: impl Into<String>, points: Vec<(f64, f64)>, style: Style) -> Self {
+        self.push(label, points, style);
+        self
+    }
+
+    /// Add a series.
+    pub fn push(&mut self, label: impl Into<String>, points: Vec<(f64, f64)>, style: Style) {
+        self.series.push(Series {
+            label: label.into(),
+            points,
+            style,
+        });
+    }
+
+    /// Add a line series as series number `slot` (its colour is the palette's `slot`-th),
+    /// after empty unlabelled ones if fewer are there.
+    pub fn line_at(
+        mut self,
+        slot: usize,
+        label: impl Into<String>,
+        points: Vec<(f64, f64)>,
+    ) -> Self {
+        while self.series.len() < slot {
+            self.push("", Vec::new(), Style::Line);
+        }
+        self.line(label, points)
+    }
+
+    /// The series so far.
+    pub fn series(&self) -> &[Series] {
+        &self.series
+    }
+
+    /// Draw it into `{dir}/{stem}.svg` and `.png` ([`series`]).
+    pub fn draw(&self, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
+        series(
+            &self.title,
+            &self.x_label,
+            &self.y_label,
+            &self.series,
+            dir,
+            stem,
+        )
+    }
+}
+
 /// Apex height per impact index, with the target apex as a dashed horizontal line: the picture
 /// of the controller's convergence.
 ///
@@ -238,25 +321,62 @@ pub fn phase_portrait(
 ///
 /// Pairs where either speed is not finite are skipped; fewer than two speeds is an error.
 pub fn return_map(speeds: &[f64], dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
-    const WHAT: &str = "return map speeds (need at least two successive finite speeds)";
     if speeds.len() < 2 {
-        return Err(PlotError::EmptyInput { what: WHAT });
+        return Err(PlotError::EmptyInput { what: RETURN_MAP });
     }
-    let points: Vec<(f64, f64)> = speeds
-        .windows(2)
-        .map(|w| (w[0], w[1]))
+    let pairs = speeds.windows(2).map(|w| (w[0], w[1])).collect();
+    return_map_points(pairs, dir, stem)
+}
+
+const RETURN_MAP: &str = "return map speeds (need at least two successive finite speeds)";
+
+/// [`return_map`] of the pairs (v_n, v_{n+1}) themselves (e.g. a decimated subset).
+pub fn return_map_points(
+    pairs: Vec<(f64, f64)>,
+    dir: &Path,
+    stem: &str,
+) -> Result<Vec<PathBuf>, PlotError> {
+    let total = pairs.len();
+    if total == 0 {
+        return Err(PlotError::EmptyInput { what: RETURN_MAP });
+    }
+    let points: Vec<(f64, f64)> = pairs
+        .into_iter()
         .filter(|&(a, b)| a.is_finite() && b.is_finite())
         .collect();
     if points.is_empty() {
         return Err(PlotError::NoFiniteData {
-            what: WHAT,
-            points: speeds.len(),
+            what: RETURN_MAP,
+            points: total + 1,
         });
     }
     // One range for both axes, so that the identity line is the diagonal.
     let range = span(points.iter().flat_map(|p| [p.0, p.1]), "speed range")?;
     let fig = ReturnMapFigure { points, range };
     render(&fig, dir, stem)
+}
+
+/// An axis label for a scene key: the key with the unit its suffix names (`_mps2`: m/s^2,
+/// `_rad`: rad, ...).
+pub fn key_label(key: &str) -> String {
+    const UNITS: [(&str, &str); 12] = [
+        ("_s2pm2", "s^2/m^2"),
+        ("_mps2", "m/s^2"),
+        ("_radps", "rad/s"),
+        ("_rad", "rad"),
+        ("_mps", "m/s"),
+        ("_hz", "Hz"),
+        ("_per_s2", "1/s^2"),
+        ("_per_s", "1/s"),
+        ("_per_m", "1/m"),
+        ("_jpkg", "J/kg"),
+        ("_m", "m"),
+        ("_s", "s"),
+    ];
+    match UNITS.iter().find(|(suffix, _)| key.ends_with(suffix)) {
+        Some((_, unit)) => format!("{key} ({unit})"),
+        None => key.to_string(),
+    }
 }
 
 /// Bifurcation diagram: a scatter of (parameter value, late apex height) as many small dots.
@@ -304,10 +424,11 @@ pub fn bifurcation(
 // ---------------------------------------------------------------------------------------------
 // Figures
 
-type DrawResult<DB> = Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+pub(crate) type DrawResult<DB> =
+    Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
 
 /// Something that can draw itself on any plotters backend (SVG and bitmap).
-trait Figure {
+pub(crate) trait Figure {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB>;
 }
 
@@ -497,14 +618,14 @@ impl Figure for BifurcationFigure {
 // ---------------------------------------------------------------------------------------------
 // Shared drawing helpers
 
-type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+type Ctx<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 fn chart<'a, DB: DrawingBackend>(
     root: &'a DrawingArea<DB, Shift>,
     title: &str,
     (x0, x1): (f64, f64),
     (y0, y1): (f64, f64),
-) -> Result<Chart<'a, DB>, DrawingAreaErrorKind<DB::ErrorType>> {
+) -> Result<Ctx<'a, DB>, DrawingAreaErrorKind<DB::ErrorType>> {
     root.fill(&WHITE)?;
     ChartBuilder::on(root)
         .caption(title, (FONT, TITLE_SIZE))
@@ -514,11 +635,7 @@ fn chart<'a, DB: DrawingBackend>(
         .build_cartesian_2d(x0..x1, y0..y1)
 }
 
-fn mesh<DB: DrawingBackend>(
-    chart: &mut Chart<'_, DB>,
-    x_desc: &str,
-    y_desc: &str,
-) -> DrawResult<DB> {
+fn mesh<DB: DrawingBackend>(chart: &mut Ctx<'_, DB>, x_desc: &str, y_desc: &str) -> DrawResult<DB> {
     chart
         .configure_mesh()
         .x_desc(x_desc)
@@ -533,7 +650,7 @@ fn mesh<DB: DrawingBackend>(
 }
 
 fn legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut Chart<'a, DB>,
+    chart: &mut Ctx<'a, DB>,
     position: SeriesLabelPosition,
 ) -> DrawResult<DB> {
     chart
@@ -662,8 +779,9 @@ fn backend_error(path: &Path, message: impl fmt::Display) -> PlotError {
     }
 }
 
-/// Draws `fig` into `{dir}/{stem}.svg` and `{dir}/{stem}.png`.
-fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
+/// Draws `fig` into `{dir}/{stem}.svg` and `{dir}/{stem}.png`, each written whole or not at
+/// all ([`crate::output::AtomicFile`]).
+pub(crate) fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
     if stem.is_empty() || stem.contains(['/', '\\']) || stem == "." || stem == ".." {
         return Err(PlotError::InvalidArgument {
             what: "file stem",
@@ -677,29 +795,28 @@ fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, Plo
         path: dir.to_path_buf(),
         source,
     })?;
-
-    // SVG: drawn into memory, then written, so a write failure is an I/O error with the path.
+    let io = |e: crate::output::OutputError| PlotError::Io {
+        path: e.path,
+        source: e.source,
+    };
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area();
         fig.draw(&root).map_err(|e| backend_error(&svg_path, e))?;
         root.present().map_err(|e| backend_error(&svg_path, e))?;
     }
-    std::fs::write(&svg_path, svg).map_err(|source| PlotError::Io {
-        path: svg_path.clone(),
-        source,
-    })?;
-
-    // PNG: check that the file can be created first, so an unwritable path is an I/O error
-    // rather than an opaque encoder error.
-    std::fs::File::create(&png_path).map_err(|source| PlotError::Io {
-        path: png_path.clone(),
-        source,
-    })?;
+    let (w, h) = PLOT_SIZE;
+    let mut rgb = vec![0u8; w as usize * h as usize * 3];
     {
-        let root = BitMapBackend::new(&png_path, PLOT_SIZE).into_drawing_area();
+        let root = BitMapBackend::with_buffer(&mut rgb, PLOT_SIZE).into_drawing_area();
         fig.draw(&root).map_err(|e| backend_error(&png_path, e))?;
         root.present().map_err(|e| backend_error(&png_path, e))?;
     }
+    crate::output::write_atomic(&svg_path, svg.as_bytes()).map_err(io)?;
+    let mut png = crate::output::AtomicFile::create(&png_path).map_err(io)?;
+    PngEncoder::new(png.writer())
+        .write_image(&rgb, w, h, ColorType::Rgb8)
+        .map_err(|e| backend_error(&png_path, e))?;
+    png.commit().map_err(io)?;
     Ok(vec![svg_path, png_path])
 }

@@ -1,8 +1,21 @@
-//! Parameter sweeps: run a scene over a range of one key and keep the late apexes
-//! (a bifurcation diagram, e.g. over `control.kappa1_s2pm2`).
+//! Parameter sweeps, the same for every system: the ranges (`--range key.path=FROM:TO:N`,
+//! and `--range2` for a two-dimensional map), the grid of points they span, and the engine
+//! that evaluates the points on every core ([`rayon`]) and hands their results on **in
+//! serial order**, so the output is identical to a serial run (`RAYON_NUM_THREADS=1` is
+//! one). Memory stays bounded: points are evaluated in chunks of [`CHUNK_POINTS`] and each
+//! chunk's results are consumed before the next is started.
+//!
+//! A sweep holds at most [`MAX_SWEEP_POINTS`] points (both ranges together); more is
+//! refused with a message naming the limit.
 
-use crate::run::{run_scene, RunError, RunOptions};
-use crate::scene::{apply_set, Scene, SceneError};
+use crate::scene::SceneError;
+use rayon::prelude::*;
+
+/// Most points one sweep evaluates (`N`, or `N x M` with `--range2`).
+pub const MAX_SWEEP_POINTS: u64 = 1_000_000;
+
+/// Points evaluated in parallel before their results are consumed in order.
+pub const CHUNK_POINTS: usize = 1024;
 
 /// A sweep range `key.path=FROM:TO:N` (N >= 2 values, inclusive ends; N = 1 runs FROM).
 #[derive(Clone, Debug, PartialEq)]
@@ -13,8 +26,31 @@ pub struct Range {
     pub from: f64,
     /// Last value.
     pub to: f64,
-    /// Number of values (>= 1).
+    /// Number of values (1 ..= [`MAX_SWEEP_POINTS`]).
     pub count: u32,
+}
+
+/// The count of a range: an integer (also written as `5e9`) in 1 ..= [`MAX_SWEEP_POINTS`].
+fn parse_count(key: &str, text: &str) -> Result<u32, SceneError> {
+    let t = text.trim();
+    let value = t
+        .parse::<u64>()
+        .ok()
+        .map(|n| n as f64)
+        .or_else(|| t.parse::<f64>().ok())
+        .filter(|v| v.is_finite() && *v >= 1.0 && v.fract() == 0.0)
+        .ok_or_else(|| {
+            SceneError::new(key, format!("range count `{t}` must be an integer >= 1"))
+        })?;
+    if value > MAX_SWEEP_POINTS as f64 {
+        return Err(SceneError::new(
+            key,
+            format!(
+                "range count `{t}` is more than a sweep may hold: at most {MAX_SWEEP_POINTS} points"
+            ),
+        ));
+    }
+    Ok(value as u32)
 }
 
 impl Range {
@@ -36,17 +72,7 @@ impl Range {
                     SceneError::new(key, format!("range {what} `{s}` is not a finite number"))
                 })
         };
-        let count: u32 = parts[2]
-            .trim()
-            .parse()
-            .ok()
-            .filter(|&n| n >= 1)
-            .ok_or_else(|| {
-                SceneError::new(
-                    key,
-                    format!("range count `{}` must be an integer >= 1", parts[2]),
-                )
-            })?;
+        let count = parse_count(key, parts[2])?;
         Ok(Self {
             key: key.trim().to_string(),
             from: num(parts[0], "start")?,
@@ -55,35 +81,104 @@ impl Range {
         })
     }
 
-    /// The values of the range.
-    pub fn values(&self) -> Vec<f64> {
+    /// The `i`-th value (`i < count`).
+    pub fn value(&self, i: u32) -> f64 {
         if self.count == 1 {
-            return vec![self.from];
+            return self.from;
         }
         let n = self.count - 1;
-        (0..=n)
-            .map(|i| self.from + (self.to - self.from) * f64::from(i) / f64::from(n))
-            .collect()
+        self.from + (self.to - self.from) * f64::from(i) / f64::from(n)
+    }
+
+    /// The values of the range.
+    pub fn values(&self) -> Vec<f64> {
+        (0..self.count).map(|i| self.value(i)).collect()
     }
 }
 
-/// Run `base` (a parsed scene table, overrides applied) at every value of `range`, keeping
-/// the last `keep` apex heights of each run: (value, apex) points.
-pub fn sweep(base: &toml::Table, range: &Range, keep: usize) -> Result<Vec<(f64, f64)>, RunError> {
-    let mut points = Vec::new();
-    for v in range.values() {
-        let mut t = base.clone();
-        apply_set(&mut t, &range.key, toml::Value::Float(v))?;
-        let scene = Scene::from_table(t)?;
-        let out = run_scene(&scene, &RunOptions::default(), None)?;
-        let n = out.apexes_m.len();
-        points.extend(
-            out.apexes_m[n.saturating_sub(keep)..]
-                .iter()
-                .map(|&a| (v, a)),
-        );
+/// The points of a sweep: every value of `x`, for each value of `y` (rows `y`, columns
+/// `x`: point `i` is column `i % x.count` of row `i / x.count`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Grid {
+    /// The first range (`--range`).
+    pub x: Range,
+    /// The second range (`--range2`), if any.
+    pub y: Option<Range>,
+}
+
+impl Grid {
+    /// A grid of `x` and `y`; refused if `y` sweeps `x`'s key or the grid holds more than
+    /// [`MAX_SWEEP_POINTS`] points.
+    pub fn new(x: Range, y: Option<Range>) -> Result<Self, SceneError> {
+        if let Some(y) = &y {
+            if y.key == x.key {
+                return Err(SceneError::new(
+                    y.key.clone(),
+                    "--range2 sweeps the same key as --range",
+                ));
+            }
+            let n = u64::from(x.count) * u64::from(y.count);
+            if n > MAX_SWEEP_POINTS {
+                return Err(SceneError::new(
+                    y.key.clone(),
+                    format!(
+                        "--range and --range2 span {} x {} = {n} points, more than a sweep may hold: at most {MAX_SWEEP_POINTS}",
+                        x.count, y.count
+                    ),
+                ));
+            }
+        }
+        Ok(Self { x, y })
     }
-    Ok(points)
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.x.count as usize * self.y.as_ref().map_or(1, |y| y.count as usize)
+    }
+
+    /// True if the grid has no point (never: counts are >= 1).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The values of point `i`: (x, y).
+    pub fn point(&self, i: usize) -> (f64, Option<f64>) {
+        let n = self.x.count as usize;
+        let x = self.x.value((i % n) as u32);
+        (x, self.y.as_ref().map(|y| y.value((i / n) as u32)))
+    }
+}
+
+/// Evaluate `eval(i)` for `i` in `0..n` on every core and pass each result to `consume` in
+/// order of `i`; the first error, in that order, ends the sweep. `progress` advances once
+/// per point (the caller finishes it).
+pub fn map_ordered<T, E>(
+    n: usize,
+    progress: &indicatif::ProgressBar,
+    eval: impl Fn(usize) -> Result<T, E> + Sync,
+    mut consume: impl FnMut(usize, T) -> Result<(), E>,
+) -> Result<(), E>
+where
+    T: Send,
+    E: Send,
+{
+    let mut start = 0;
+    while start < n {
+        let end = (start + CHUNK_POINTS).min(n);
+        let results: Vec<Result<T, E>> = (start..end)
+            .into_par_iter()
+            .map(|i| {
+                let r = eval(i);
+                progress.inc(1);
+                r
+            })
+            .collect();
+        for (i, r) in (start..end).zip(results) {
+            consume(i, r?)?;
+        }
+        start = end;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -100,5 +195,76 @@ mod tests {
         assert_eq!(Range::parse("a.b=1:x:3").unwrap_err().key, "a.b");
         assert!(Range::parse("a.b=1:2:0").is_err());
         assert!(Range::parse("a.b=1:2").is_err());
+        assert!(Range::parse("a.b=1:2:2.5").is_err());
+        assert_eq!(Range::parse("a.b=1:2:1e3").unwrap().count, 1000);
+    }
+
+    #[test]
+    fn huge_counts_are_refused_naming_the_limit() {
+        for n in ["5e9", "5000000000", "1000001", "1e300"] {
+            let e = Range::parse(&format!("a.b=0:1:{n}")).unwrap_err();
+            assert_eq!(e.key, "a.b");
+            assert!(e.reason.contains("at most 1000000 points"), "{n}: {e}");
+        }
+        assert_eq!(Range::parse("a.b=0:1:1000000").unwrap().count, 1_000_000);
+        let x = Range::parse("a.x=0:1:2000").unwrap();
+        let y = Range::parse("a.y=0:1:1000").unwrap();
+        let e = Grid::new(x.clone(), Some(y)).unwrap_err();
+        assert!(e.reason.contains("2000000 points"), "{e}");
+        assert!(Grid::new(x.clone(), Some(x)).is_err());
+    }
+
+    #[test]
+    fn grid_points_run_row_by_row() {
+        let g = Grid::new(
+            Range::parse("a=0:2:3").unwrap(),
+            Some(Range::parse("b=10:20:2").unwrap()),
+        )
+        .unwrap();
+        let pts: Vec<_> = (0..g.len()).map(|i| g.point(i)).collect();
+        assert_eq!(
+            pts,
+            [
+                (0.0, Some(10.0)),
+                (1.0, Some(10.0)),
+                (2.0, Some(10.0)),
+                (0.0, Some(20.0)),
+                (1.0, Some(20.0)),
+                (2.0, Some(20.0))
+            ]
+        );
+    }
+
+    #[test]
+    fn results_come_in_serial_order_and_the_first_error_wins() {
+        let pb = indicatif::ProgressBar::hidden();
+        let mut seen = Vec::new();
+        map_ordered(
+            3000,
+            &pb,
+            |i| Ok::<usize, String>(i * i),
+            |i, v| {
+                seen.push((i, v));
+                Ok(())
+            },
+        )
+        .unwrap();
+        assert!(seen
+            .iter()
+            .enumerate()
+            .all(|(k, &(i, v))| k == i && v == i * i));
+        assert_eq!(seen.len(), 3000);
+        let mut consumed = 0;
+        let r = map_ordered(
+            3000,
+            &pb,
+            |i| if i % 700 == 699 { Err(i) } else { Ok(i) },
+            |_, _| {
+                consumed += 1;
+                Ok(())
+            },
+        );
+        assert_eq!(r, Err(699));
+        assert_eq!(consumed, 699);
     }
 }

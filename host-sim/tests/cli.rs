@@ -1,15 +1,10 @@
 //! The `dexter` binary end to end: bad scenes exit non-zero naming the key and the reason
 //! (never a panic); `--json` and `--trace` carry what the docs promise.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn dexter(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dexter"))
-        .args(args)
-        .output()
-        .expect("the dexter binary runs")
-}
+use common::dexter;
+use std::path::PathBuf;
 
 fn scene_file(name: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("dexter-cli-test-{}", std::process::id()));

@@ -2,52 +2,23 @@
 //! scenes, checked against the closed forms of Koditschek & Bühler (eq. 15, 19) and for
 //! named errors.
 
+mod common;
+
+use common::{dexter, json, scratch};
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
 const E2: f64 = std::f64::consts::E * std::f64::consts::E;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
-
 fn scene(fig: &str) -> String {
-    root()
-        .join("scenes")
-        .join(format!("hopper-fig{fig}.toml"))
-        .display()
-        .to_string()
-}
-
-fn dexter(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dexter"))
-        .args(args)
-        .output()
-        .expect("run dexter")
+    common::scene(&format!("hopper-fig{fig}"))
 }
 
 fn ok_stdout(args: &[&str]) -> String {
-    let out = dexter(args);
-    assert!(
-        out.status.success(),
-        "dexter {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    serde_json::from_str(&ok_stdout(args)).expect("one JSON object")
+    String::from_utf8(common::ok(args).stdout).unwrap()
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dexter-hopper-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    scratch(&format!("hopper-cli-{name}"))
 }
 
 fn f(v: &serde_json::Value) -> f64 {

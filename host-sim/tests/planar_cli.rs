@@ -5,28 +5,19 @@
 use dexter_core::tilt::{kappa_crit, tilt_eigenvalues};
 use dexter_sim::model::planar::analysis::classify;
 use dexter_sim::model::planar::PlanarParams;
+mod common;
+
+use common::dexter;
 use serde_json::Value;
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
 const G: f64 = 9.81;
 const RHO: f64 = 0.094_28;
 const L: f64 = 0.133_333_333_333;
 
-fn dexter(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dexter"))
-        .args(args)
-        .output()
-        .expect("the dexter binary runs")
-}
-
 fn scene(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("scenes")
-        .join(format!("planar-{name}.toml"))
-        .to_string_lossy()
-        .into_owned()
+    common::scene(&format!("planar-{name}"))
 }
 
 fn tmp(name: &str) -> PathBuf {

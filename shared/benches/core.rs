@@ -3,16 +3,17 @@
 //! - math backend: `libm` vs `micromath` vs the core's own f32 polynomial (sin), and their
 //!   worst-case error over [-pi, pi] printed once before timing;
 //! - f32 vs f64: the mirror-law reference and the eq. 8 return map in each precision;
-//! - the whole control step (validate, estimate, mirror law, track, limit).
+//! - the whole control step (validate, estimate, mirror law, track, limit), its Track path
+//!   (a recorded closed-loop juggle) and its safe state timed separately.
 //!
 //! Run: `cargo bench -p dexter-core --bench core`. Instruction counts on the Cortex-M4F are
 //! measured in QEMU by the firmware (see BENCHMARKS.md).
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use dexter_core::control::{Controller, ControllerParams};
 use dexter_core::math::{cos_poly_f32, sin_poly_f32};
 use dexter_core::mirror::MirrorLaw;
-use dexter_core::protocol::SensorFrame;
+use dexter_core::protocol::{Mode, SensorFrame};
 use dexter_core::state::BallState;
 use micromath::F32Ext;
 use std::hint::black_box;
@@ -63,18 +64,19 @@ fn precision(c: &mut Criterion) {
         .iter()
         .map(|s| BallState::new(s.height_m as f64, s.velocity_mps as f64))
         .collect();
+    // every evaluation's r, r' and r'' are consumed (black_box), so none is optimised away
     g.bench_function("f32", |b| {
         b.iter(|| {
-            s32.iter()
-                .map(|s| l32.reference(black_box(s)).height_m)
-                .sum::<f32>()
+            for s in &s32 {
+                black_box(l32.reference(black_box(s)));
+            }
         })
     });
     g.bench_function("f64", |b| {
         b.iter(|| {
-            s64.iter()
-                .map(|s| l64.reference(black_box(s)).height_m)
-                .sum::<f64>()
+            for s in &s64 {
+                black_box(l64.reference(black_box(s)));
+            }
         })
     });
     g.finish();
@@ -99,28 +101,86 @@ fn precision(c: &mut Criterion) {
     g.finish();
 }
 
+/// Frames of a real closed-loop juggle: the default controller drives a paddle (commanded
+/// acceleration held over each period, as the firmware's HIL plant) under a ball with
+/// restitution 0.8. Returns the controller as it was before the first recorded frame, and
+/// the frames; replaying them from that state reproduces the same (Track-mode) steps.
+fn juggle_frames(params: ControllerParams, warm_up: u32, n: u32) -> (Controller, Vec<SensorFrame>) {
+    let mut ctl = Controller::new(params).unwrap();
+    let (dt, g) = (params.dt_s, params.gravity_mps2);
+    let e = params.estimator.restitution;
+    let (mut b, mut vb, mut p, mut vp) = (1.2f32, 0.0f32, params.home_height_m, 0.0f32);
+    let mut start = ctl.clone();
+    let mut frames = Vec::with_capacity(n as usize);
+    for seq in 0..warm_up + n {
+        if seq == warm_up {
+            start = ctl.clone();
+        }
+        let frame = SensorFrame {
+            seq,
+            ball_height_m: b,
+            paddle_height_m: p,
+            paddle_velocity_mps: vp,
+        };
+        let cmd = ctl.step(&frame);
+        if seq >= warm_up {
+            assert_eq!(
+                cmd.mode,
+                Mode::Track,
+                "frame {seq} is not a Track step: {cmd:?}"
+            );
+            frames.push(frame);
+        }
+        let u = cmd.paddle_accel_mps2;
+        b += vb * dt - 0.5 * g * dt * dt;
+        vb -= g * dt;
+        p += vp * dt + 0.5 * u * dt * dt;
+        vp += u * dt;
+        if b <= p && vb < vp {
+            vb = vp + e * (vp - vb);
+            b = p;
+        }
+    }
+    (start, frames)
+}
+
+/// The control step, each path timed on its own: Track (a closed-loop juggle replayed from
+/// the controller state it was recorded with: every step estimates, runs the mirror law and
+/// tracks, impacts included), and the safe state for a non-finite and for an out-of-range
+/// measurement.
 fn control_step(c: &mut Criterion) {
     let params = ControllerParams::default();
-    let mut ctl = Controller::new(params).unwrap();
-    let g = 9.81f32;
-    let frames: Vec<SensorFrame> = (0..2000u32)
-        .map(|k| {
-            let t = (k as f32 * params.dt_s) % 0.9;
-            SensorFrame {
-                seq: k,
-                ball_height_m: 1.0 - 0.5 * g * t * t + 0.4,
-                paddle_height_m: -0.01,
-                paddle_velocity_mps: 0.1,
-            }
-        })
-        .collect();
-    let mut i = 0usize;
-    c.bench_function("controller_step", |b| {
-        b.iter(|| {
-            i = (i + 1) % frames.len();
-            ctl.step(black_box(&frames[i]))
-        })
+    let (start, frames) = juggle_frames(params, 1000, 2000);
+    let mut g = c.benchmark_group("controller_step");
+    g.throughput(Throughput::Elements(frames.len() as u64));
+    g.bench_function("track_2000_steps", |b| {
+        b.iter_batched_ref(
+            || start.clone(),
+            |ctl| {
+                for f in &frames {
+                    black_box(ctl.step(black_box(f)));
+                }
+            },
+            BatchSize::SmallInput,
+        )
     });
+    let mut ctl = start.clone();
+    let mut seq = frames.len() as u32;
+    for (name, ball_m) in [("safe_non_finite", f32::NAN), ("safe_out_of_range", 1e6)] {
+        let frame = SensorFrame {
+            ball_height_m: ball_m,
+            ..frames[0]
+        };
+        assert_eq!(ctl.step(&frame).mode, Mode::Safe);
+        g.throughput(Throughput::Elements(1));
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                seq = seq.wrapping_add(1);
+                ctl.step(black_box(&SensorFrame { seq, ..frame }))
+            })
+        });
+    }
+    g.finish();
 }
 
 criterion_group!(benches, math_backends, precision, control_step);

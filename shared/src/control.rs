@@ -123,6 +123,29 @@ pub struct Controller {
     stale_steps: u16,
     /// Last valid paddle measurement, dead-reckoned with our own commands while faulted.
     paddle: PaddleState<f32>,
+    /// Plausible paddle measurements, computed once from the limits (see [`Self::check`]).
+    plausible: PlausiblePaddle,
+}
+
+/// The plausible range of a paddle measurement: the travel range widened by 5 % of its
+/// length on each side, and speeds up to twice the limit. Computed once (it depends only on
+/// the parameters), so the step does not recompute it.
+#[derive(Clone, Copy, Debug)]
+struct PlausiblePaddle {
+    min_height_m: f32,
+    max_height_m: f32,
+    max_speed_mps: f32,
+}
+
+impl PlausiblePaddle {
+    fn new(l: &PaddleLimits) -> Self {
+        let travel_margin_m = 0.05 * (l.max_height_m - l.min_height_m);
+        Self {
+            min_height_m: l.min_height_m - travel_margin_m,
+            max_height_m: l.max_height_m + travel_margin_m,
+            max_speed_mps: 2.0 * l.velocity_max_mps,
+        }
+    }
 }
 
 impl Controller {
@@ -151,6 +174,7 @@ impl Controller {
             last_seq: None,
             stale_steps: 0,
             paddle: PaddleState::new(params.home_height_m, 0.0),
+            plausible: PlausiblePaddle::new(&params.limits),
         })
     }
 
@@ -246,13 +270,12 @@ impl Controller {
             return Err(Fault::NonFinite);
         }
         let p = &self.params;
-        let l = &p.limits;
-        let travel_margin_m = 0.05 * (l.max_height_m - l.min_height_m);
+        let q = &self.plausible;
         let ball_range = p.ball_height_min_m..=p.ball_height_max_m;
-        let paddle_range = (l.min_height_m - travel_margin_m)..=(l.max_height_m + travel_margin_m);
+        let paddle_range = q.min_height_m..=q.max_height_m;
         if !ball_range.contains(&frame.ball_height_m)
             || !paddle_range.contains(&frame.paddle_height_m)
-            || frame.paddle_velocity_mps.abs() > 2.0 * l.velocity_max_mps
+            || frame.paddle_velocity_mps.abs() > q.max_speed_mps
         {
             return Err(Fault::OutOfRange);
         }
@@ -310,6 +333,7 @@ impl FixedRate for Controller {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fixed_rate::Reply;
 
     fn frame(seq: u32, ball: f32) -> SensorFrame {
         SensorFrame {
@@ -378,6 +402,140 @@ mod tests {
             v += cmd.paddle_accel_mps2 * 0.002;
         }
         assert!(v.abs() < 1e-5, "paddle still moving at {v}");
+    }
+
+    /// A settled controller: a ball in free fall from 1 m for 40 steps (valid after 27).
+    fn tracking_controller() -> (Controller, u32) {
+        let mut c = Controller::new(ControllerParams::default()).unwrap();
+        let g = 9.81f32;
+        for k in 0..40u32 {
+            let t = k as f32 * 0.002;
+            assert_eq!(c.step(&frame(k, 1.0 - 0.5 * g * t * t)).fault, Fault::None);
+        }
+        (c, 40)
+    }
+
+    #[test]
+    fn telemetry_reports_the_estimate() {
+        let (c, _) = tracking_controller();
+        let t = c.telemetry();
+        let e = c.estimate();
+        assert!(e.valid && t.estimate_valid);
+        let [height_m, velocity_mps, unused] = t.estimate;
+        assert_eq!(height_m, e.ball.height_m);
+        assert_eq!(velocity_mps, e.ball.velocity_mps);
+        assert_eq!(unused, 0.0);
+        // the estimate is the falling ball at step 39: b = 1 - g t^2/2, v = -g t
+        let t39 = 39.0 * 0.002f32;
+        assert!((height_m - (1.0 - 0.5 * 9.81 * t39 * t39)).abs() < 1e-5);
+        assert!((velocity_mps + 9.81 * t39).abs() < 1e-3);
+        assert!(height_m != 0.0 && velocity_mps != 0.0);
+    }
+
+    /// The safe state dead-reckons the paddle under its own braking command, by hand:
+    /// from (0.05 m, 1 m/s) with a_max = 200 m/s^2 and dt = 2 ms, u = max(-v/dt, -200):
+    /// u = -200 -> (0.0516, 0.6); u = -200 -> (0.0524, 0.2); u = -100 -> (0.0526, 0).
+    #[test]
+    fn safe_state_dead_reckons_the_paddle_by_hand() {
+        let mut c = Controller::new(ControllerParams::default()).unwrap();
+        let mut f = frame(0, 0.5);
+        f.paddle_height_m = 0.05;
+        f.paddle_velocity_mps = 1.0;
+        c.step(&f);
+        let want = [
+            (-200.0, 0.0516),
+            (-200.0, 0.0524),
+            (-100.0, 0.0526),
+            (0.0, 0.0526),
+        ];
+        for (k, (u, h)) in want.into_iter().enumerate() {
+            let cmd = c.step(&frame(1 + k as u32, f32::NAN));
+            assert_eq!((cmd.mode, cmd.fault), (Mode::Safe, Fault::NonFinite));
+            assert!(
+                (cmd.paddle_accel_mps2 - u).abs() < 1e-2,
+                "step {k}: {cmd:?}"
+            );
+            assert!(
+                (cmd.paddle_height_ref_m - h).abs() < 1e-6,
+                "step {k}: {cmd:?}"
+            );
+            assert_eq!(cmd.paddle_velocity_ref_mps, 0.0);
+        }
+    }
+
+    /// Plausible measurements: the ball in [ball_height_min_m, ball_height_max_m]
+    /// (inclusive), the paddle within its travel widened by 5 % of its length on each side
+    /// (limits -0.3..0.1 m: -0.32..0.12 m), paddle speed up to twice the limit (6 m/s).
+    #[test]
+    fn plausible_ranges_by_hand() {
+        let p = ControllerParams::default();
+        let cases: [(f32, f32, f32, bool); 12] = [
+            (-0.5, 0.0, 0.0, true),
+            (20.0, 0.0, 0.0, true),
+            (-0.5001, 0.0, 0.0, false),
+            (20.001, 0.0, 0.0, false),
+            (0.5, -0.3199, 0.0, true),
+            (0.5, -0.3201, 0.0, false),
+            (0.5, 0.1199, 0.0, true),
+            (0.5, 0.1201, 0.0, false),
+            (0.5, 0.0, 6.0, true),
+            (0.5, 0.0, -6.0, true),
+            (0.5, 0.0, 6.001, false),
+            (0.5, 0.0, -6.001, false),
+        ];
+        for (n, (ball, paddle, speed, ok)) in cases.into_iter().enumerate() {
+            let mut c = Controller::new(p).unwrap();
+            let cmd = c.step(&SensorFrame {
+                seq: 0,
+                ball_height_m: ball,
+                paddle_height_m: paddle,
+                paddle_velocity_mps: speed,
+            });
+            let want = if ok { Fault::None } else { Fault::OutOfRange };
+            assert_eq!(cmd.fault, want, "case {n}: {cmd:?}");
+        }
+    }
+
+    /// A sequence number is new if it moved forward by 1 ..= 2^31 - 2 (wrapping); a jump of
+    /// 2^31 - 1 or more counts as going back (a repeat: stale after the limit).
+    #[test]
+    fn sequence_numbers_move_forward_with_wrapping() {
+        let mut c = Controller::new(ControllerParams::default()).unwrap();
+        c.step(&frame(u32::MAX - 1, 0.5));
+        // wraps forward: u32::MAX, 0, 1 are new samples (the stale count never grows)
+        for seq in [u32::MAX, 0, 1] {
+            for _ in 0..6 {
+                assert_eq!(c.step(&frame(seq, 0.5)).fault, Fault::None);
+            }
+        }
+        let far = 1u32.wrapping_add(u32::MAX / 2 - 1);
+        assert_eq!(c.step(&frame(far, 0.5)).fault, Fault::None);
+        let beyond = far.wrapping_add(u32::MAX / 2);
+        let faults: Vec<Fault> = (0..6).map(|_| c.step(&frame(beyond, 0.5)).fault).collect();
+        assert_eq!(faults[..5], [Fault::None; 5], "5 repeats are tolerated");
+        assert_eq!(faults[5], Fault::Stale);
+    }
+
+    #[test]
+    fn fixed_rate_trait_forwards_to_the_controller() {
+        let (mut a, seq) = tracking_controller();
+        let mut b = a.clone();
+        let f = frame(seq, 0.2);
+        let via_trait = <Controller as FixedRate>::step(&mut a, &f);
+        assert_eq!(via_trait, b.step(&f));
+        assert_eq!(
+            (via_trait.seq(), via_trait.mode(), via_trait.fault()),
+            (seq, Mode::Track, Fault::None)
+        );
+        assert_eq!(<Controller as FixedRate>::telemetry(&a), b.telemetry());
+        assert_eq!(<Controller as FixedRate>::params(&a), b.params());
+        let safe = <Controller as FixedRate>::safe(&mut a, 77, Fault::LinkTimeout);
+        assert_eq!(safe, b.safe(77, Fault::LinkTimeout));
+        assert_eq!(
+            (safe.seq(), safe.mode(), safe.fault()),
+            (77, Mode::Safe, Fault::LinkTimeout)
+        );
+        assert!(<Controller as FixedRate>::new(ControllerParams::default()).is_ok());
     }
 
     #[test]

@@ -30,6 +30,8 @@
 // One `asm!` (the FPU square root in `math.rs`) is the only unsafe code; it is allowed there.
 #![deny(unsafe_code)]
 
+pub mod arm_control;
+pub mod bspline;
 pub mod control;
 pub mod echo;
 pub mod estimate;

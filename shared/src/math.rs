@@ -8,7 +8,9 @@
 //!   within 1 ulp. On a Cortex-M4F `sinf`/`cosf` cost 1,100–2,100 instructions a call because
 //!   libm computes their range reduction in f64, which the M4F does in software; `atan2f` ~83.
 //! - **fast** (feature `fast-math`): `micromath`'s approximations: `sin`/`cos` ~27 instructions
-//!   at ~1e-3 absolute error, `atan2` ~1e-2 rad worst case, `exp`/`ln` ~1e-3 relative.
+//!   at ~1e-3 absolute error, `atan2` ~1e-2 rad worst case, `exp` ~2.4e-3 relative on
+//!   [-5, 5], but `ln` up to 0.12 absolute (at x = 0.375; measured over (0, 10]): laws that
+//!   need a logarithm (the hopper's maps) should not use this backend for it.
 //!
 //! `sqrt` is correctly rounded in both backends: on hard-float ARM (`target_abi = "eabihf"`,
 //! e.g. the Cortex-M4F) it is the FPU's `vsqrt.f32` (14 cycles), elsewhere `libm::sqrtf`
@@ -198,32 +200,38 @@ impl Real for f32 {
 /// Name of the `f32` backend compiled in: `"libm"` or `"micromath"`.
 pub const BACKEND: &str = backend::NAME;
 
-/// Correctly rounded f32 square root: the FPU's `vsqrt.f32` on hard-float ARM.
-///
-/// The value passes through core registers and `s0` is saved and restored inside the block,
-/// because naming an FPU register class in `asm!` needs an unstable target feature on ARM.
+/// The hard-float ARM square root (a module of its own so tools can name it: its body is
+/// compiled only for the target).
 #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
-#[inline]
-#[allow(unsafe_code)]
-pub(crate) fn sqrt_f32(x: f32) -> f32 {
-    let bits: u32;
-    // SAFETY: the block moves `x` into s0, runs `vsqrt.f32`, moves the result out and
-    // restores s0 from a core register; it touches no memory and no stack, and every eabihf
-    // target has a VFP unit with this instruction.
-    unsafe {
-        core::arch::asm!(
-            "vmov {save}, s0",
-            "vmov s0, {x}",
-            "vsqrt.f32 s0, s0",
-            "vmov {x}, s0",
-            "vmov s0, {save}",
-            x = inout(reg) x.to_bits() => bits,
-            save = out(reg) _,
-            options(pure, nomem, nostack),
-        );
+mod fpu {
+    /// Correctly rounded f32 square root: the FPU's `vsqrt.f32` on hard-float ARM.
+    ///
+    /// The value passes through a core register and the scratch register `s15` (declared
+    /// clobbered; it is caller-saved under the eabihf calling convention), because naming an FPU
+    /// register class for an operand in `asm!` needs an unstable target feature on ARM. Cost:
+    /// `vsqrt.f32` (14 cycles on a Cortex-M4) plus four `vmov`s.
+    #[inline]
+    #[allow(unsafe_code)]
+    pub(crate) fn sqrt_f32(x: f32) -> f32 {
+        let bits: u32;
+        // SAFETY: the block moves `x` into s15, runs `vsqrt.f32`, moves the result out; s15 is
+        // declared clobbered; it touches no memory and no stack, and every eabihf target has a
+        // VFP unit with this instruction.
+        unsafe {
+            core::arch::asm!(
+                "vmov s15, {x}",
+                "vsqrt.f32 s15, s15",
+                "vmov {x}, s15",
+                x = inout(reg) x.to_bits() => bits,
+                out("s15") _,
+                options(pure, nomem, nostack),
+            );
+        }
+        f32::from_bits(bits)
     }
-    f32::from_bits(bits)
 }
+#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+pub(crate) use fpu::sqrt_f32;
 
 /// Correctly rounded f32 square root: `libm::sqrtf` where there is no FPU instruction to use.
 #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
@@ -259,7 +267,10 @@ mod backend {
 }
 
 #[cfg(feature = "fast-math")]
-mod backend {
+use micromath_backend as backend;
+
+#[cfg(feature = "fast-math")]
+mod micromath_backend {
     use micromath::F32Ext;
     pub(super) const NAME: &str = "micromath";
     pub(super) use super::sqrt_f32 as sqrt;
@@ -386,11 +397,72 @@ mod tests {
     #[test]
     fn backend_sqrt_is_accurate_enough_for_either_backend() {
         for &x in &[1e-6f32, 0.01, 0.5, 2.0, 9.81, 1234.5, 1e6] {
-            let rel = ((x.sqrt() as f64) - (x as f64).sqrt()).abs() / (x as f64).sqrt();
+            let rel = ((Real::sqrt(x) as f64) - (x as f64).sqrt()).abs() / (x as f64).sqrt();
             assert!(rel < 1e-7, "sqrt({x}) rel error {rel:e} with {BACKEND}");
         }
         assert_eq!(Real::sqrt(0.0f32), 0.0);
         assert!(Real::sqrt(-1.0f32).is_nan());
+    }
+
+    /// Every `Real` function against std's f64 (an independent implementation), at a few
+    /// arguments each; the tolerance is the backend's documented accuracy.
+    #[test]
+    fn real_functions_match_std_for_f32_and_f64() {
+        let (tol_trig, tol_atan, tol_exp, tol_ln) = if BACKEND == "libm" {
+            (1e-6, 1e-6, 1e-6, 1e-6)
+        } else {
+            // micromath: ln is far worse than the rest (0.118 at x = 0.375)
+            (2e-3, 2e-2, 3e-3, 0.12)
+        };
+        for &x in &[-2.5f64, -0.3, 0.7, 1.9, 3.0] {
+            let xf = x as f32;
+            let xe = xf as f64;
+            assert!(
+                (Real::sin(xf).to_f64() - xe.sin()).abs() < tol_trig,
+                "sin {x}"
+            );
+            assert!(
+                (Real::cos(xf).to_f64() - xe.cos()).abs() < tol_trig,
+                "cos {x}"
+            );
+            let a = Real::atan2(xf, 0.8f32).to_f64();
+            assert!((a - xe.atan2(0.8f32 as f64)).abs() < tol_atan, "atan2 {x}");
+            let ex = Real::exp(xf).to_f64();
+            assert!((ex - xe.exp()).abs() < tol_exp * xe.exp(), "exp {x}");
+            let ln = Real::ln(xf.abs()).to_f64();
+            assert!((ln - xe.abs().ln()).abs() < tol_ln, "ln {x}");
+            assert_eq!(Real::abs(xf), xf.abs());
+            // f64: always libm
+            assert!((Real::sin(x) - x.sin()).abs() < 1e-15);
+            assert!((Real::cos(x) - x.cos()).abs() < 1e-15);
+            assert!((Real::atan2(x, -0.4) - x.atan2(-0.4)).abs() < 1e-15);
+            assert!((Real::exp(x) - x.exp()).abs() < 1e-15 * x.exp());
+            assert!((Real::ln(x.abs()) - x.abs().ln()).abs() < 1e-15);
+            assert!((Real::sqrt(x.abs()) - x.abs().sqrt()).abs() < 1e-15);
+            assert_eq!(Real::abs(x), x.abs());
+        }
+        assert_eq!(<f32 as Real>::of(0.1), 0.1f32);
+        assert_eq!(<f64 as Real>::of(0.1), 0.1f64);
+        assert_eq!(0.1f32.to_f64(), 0.1f32 as f64);
+        assert_eq!(Real::to_f64(-2.5f64), -2.5);
+        for v in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            assert!(!Real::is_finite(v));
+            assert!(!Real::is_finite(v as f64));
+        }
+        assert!(Real::is_finite(1.0f32) && Real::is_finite(1.0f64));
+    }
+
+    #[test]
+    fn min_max_pick_the_right_value_and_nan_yields_the_other() {
+        assert_eq!(1.0f32.min_r(2.0), 1.0);
+        assert_eq!(2.0f32.min_r(1.0), 1.0);
+        assert_eq!(1.0f64.max_r(2.0), 2.0);
+        assert_eq!(2.0f64.max_r(1.0), 2.0);
+        assert_eq!(f32::NAN.min_r(3.0), 3.0);
+        assert_eq!(f32::NAN.max_r(3.0), 3.0);
+        assert_eq!((-1.0f32).clamp_r(-1.0, 1.0), -1.0);
+        assert_eq!(1.0f32.clamp_r(-1.0, 1.0), 1.0);
+        assert_eq!((-2.0f32).clamp_r(-1.0, 1.0), -1.0);
     }
 
     #[test]

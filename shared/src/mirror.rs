@@ -254,7 +254,48 @@ mod tests {
     }
 
     #[test]
+    fn accessors_return_the_parameters_and_eta_star_is_g_h() {
+        let l = MirrorLaw::new(0.2, 0.03, 1.5, 9.0).unwrap();
+        assert_eq!(l.kappa0(), 0.2);
+        assert_eq!(l.kappa1_s2pm2(), 0.03);
+        assert_eq!(l.gravity_mps2(), 9.0);
+        assert!((l.target_energy_jpkg() - 13.5).abs() < 1e-12);
+        assert!((l.target_apex_m() - 1.5).abs() < 1e-12);
+        // k(w) at the target energy is kappa0; 1 J/kg below it, kappa0 + kappa1
+        assert!((l.gain(&BallState::new(1.5, 0.0)) - 0.2).abs() < 1e-12);
+        assert!((l.gain(&BallState::new(0.0, (2.0f64 * 12.5).sqrt())) - 0.23).abs() < 1e-12);
+    }
+
+    /// Without energy feedback (kappa1 = 0) only matched kappa0 has period-1 orbits (every
+    /// speed is one; the target's is returned, v = sqrt(2 g h)); where the root is v^2 = 0
+    /// there is no orbit (no flight).
+    #[test]
+    fn fixed_point_without_feedback_and_at_zero_speed() {
+        let alpha = 0.6;
+        let matched = MirrorLaw::new(MirrorLaw::matched_kappa0(alpha).unwrap(), 0.0, 1.5, G);
+        let v = matched.unwrap().fixed_point_speed_mps(alpha).unwrap();
+        assert!((v - (2.0 * G * 1.5).sqrt()).abs() < 1e-12);
+        let unmatched = MirrorLaw::new(0.3, 0.0, 1.5, G).unwrap();
+        assert_eq!(unmatched.fixed_point_speed_mps(alpha), None);
+        // alpha = 0: matched kappa0 = 1; kappa0 = 0.5, kappa1 = 0.25, eta* = 4 * 0.5 = 2:
+        // v^2 = 2 * 2 + 2 (0.5 - 1) / 0.25 = 0 exactly
+        let l = MirrorLaw::new(0.5, 0.25, 0.5, 4.0).unwrap();
+        assert_eq!(l.fixed_point_speed_mps(0.0), None);
+        assert_eq!(l.fixed_point_slope(0.0), None);
+    }
+
+    #[test]
     fn constructor_names_bad_parameters() {
+        assert_eq!(
+            ParamError::OutOfRange("kappa0").to_string(),
+            "kappa0 is out of its allowed range"
+        );
+        assert_eq!(ParamError::NotPositive("g").to_string(), "g must be > 0");
+        assert_eq!(ParamError::Negative("k").to_string(), "k must be >= 0");
+        assert_eq!(
+            ParamError::NotFinite("h").to_string(),
+            "h must be a finite number"
+        );
         assert_eq!(
             MirrorLaw::new(1.0, 0.1, 1.0, G).unwrap_err(),
             ParamError::OutOfRange("kappa0")

@@ -102,6 +102,8 @@ pub enum Fault {
     Stale = 3,
     /// No valid frame arrived on the link within its timeout (set by the firmware).
     LinkTimeout = 4,
+    /// The control period's work ran past the next tick (set by a board's fixed-rate loop).
+    Overrun = 5,
 }
 
 /// The line juggler's output for one control period.

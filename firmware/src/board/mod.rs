@@ -3,9 +3,10 @@
 //!   `ReadReady` for the free-running mode), and
 //! - a [`StepTimer`] that counts what one control step costs.
 //!
-//! [`mps2_an386`] is the emulated Cortex-M4F QEMU runs; a real board (e.g. an STM32F4
-//! with its USART and the DWT cycle counter, [`DwtCycles`]) is a new module of the same
-//! shape (see firmware/README.md).
+//! [`mps2_an386`] is the emulated Cortex-M4F QEMU runs. A real board is a crate of its own
+//! (`boards/nucleo-f446re`: it needs its HAL, its `memory.x` and its probe-rs runner) that
+//! links this library: its USART as the link, [`DwtCycles`] as the timer, and
+//! `dexter_drivers` for its sensors, actuator and fixed-rate tick (see firmware/README.md).
 
 pub mod mps2_an386;
 

@@ -1,11 +1,17 @@
-//! The host end of the byte link to the firmware: two FIFOs for the semihosting link, or
-//! the TCP socket QEMU attaches the UART to. Reads wait with `poll(2)` on the calling
-//! thread, in slices, so an emulator that died is noticed at once; one `write` per frame,
-//! one `poll` and one `read` per answer, no thread hand-off and no allocation per frame.
+//! The host end of the byte link to the firmware: two FIFOs for the semihosting link, the
+//! TCP socket QEMU attaches the UART to, or a real board's serial port. Reads wait with
+//! `poll(2)` on the calling thread, in slices, so an emulator that died is noticed at once;
+//! one `write` per frame, one `poll` and one `read` per answer, no thread hand-off and no
+//! allocation per frame.
+//!
+//! [`Peer`] is what runs at the other end: a QEMU process, or a board (no process to
+//! watch: its port is all the host knows of it).
 
 use super::qemu::{describe_exit, link_err, Qemu, WorkDir};
+use super::serial::{self, SerialPortOptions};
 use super::{LinkKind, SEMIHOSTING_LINK_FILES};
 use crate::controller::ControllerError;
+use serialport::TTYPort;
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
@@ -87,6 +93,7 @@ fn open_fifo(path: &Path) -> Result<File, ControllerError> {
 enum Io {
     Fifo { h2d: File, d2h: File },
     Tcp(TcpStream),
+    Serial(TTYPort),
 }
 
 /// A connected link.
@@ -124,11 +131,25 @@ impl Link {
         })
     }
 
+    /// Open a board's serial port and clear the line ([`serial::resync`]).
+    pub(super) fn serial(
+        opts: &SerialPortOptions,
+        timeout: Duration,
+    ) -> Result<Link, ControllerError> {
+        let mut port = serial::open(opts)?;
+        serial::resync(&mut port, timeout)?;
+        Ok(Link {
+            io: Io::Serial(port),
+            buf: Box::new([0; READ_CHUNK]),
+        })
+    }
+
     /// Write all of `bytes` (one system call for a frame).
     pub(super) fn write_all(&mut self, bytes: &[u8]) -> std::io::Result<()> {
         match &mut self.io {
             Io::Fifo { h2d, .. } => h2d.write_all(bytes),
             Io::Tcp(s) => s.write_all(bytes),
+            Io::Serial(p) => p.write_all(bytes),
         }
     }
 
@@ -136,6 +157,7 @@ impl Link {
         match &self.io {
             Io::Fifo { d2h, .. } => d2h.as_raw_fd(),
             Io::Tcp(s) => s.as_raw_fd(),
+            Io::Serial(p) => p.as_raw_fd(),
         }
     }
 
@@ -163,6 +185,7 @@ impl Link {
         let n = match &mut self.io {
             Io::Fifo { d2h, .. } => d2h.read(&mut self.buf[..])?,
             Io::Tcp(s) => s.read(&mut self.buf[..])?,
+            Io::Serial(p) => p.read(&mut self.buf[..])?,
         };
         if n == 0 {
             return Err(std::io::Error::new(
@@ -206,6 +229,68 @@ fn accept_with_deadline(
                 std::thread::sleep(Duration::from_millis(5));
             }
             Err(e) => return Err(link_err(format!("accept failed: {e}"))),
+        }
+    }
+}
+
+/// What answers at the other end of the link.
+pub(super) enum Peer {
+    /// The firmware in QEMU.
+    Qemu(Qemu),
+    /// A board on a serial port.
+    Board(SerialPortOptions),
+}
+
+impl Peer {
+    /// The exit status, if the peer is a process that has exited (a board never does).
+    pub(super) fn exited(&mut self) -> Option<std::process::ExitStatus> {
+        match self {
+            Peer::Qemu(q) => q.exited(),
+            Peer::Board(_) => None,
+        }
+    }
+
+    /// A link error, with what is known of the peer's state.
+    pub(super) fn dead_or(&mut self, msg: String) -> ControllerError {
+        match self {
+            Peer::Qemu(q) => q.dead_or(msg),
+            Peer::Board(opts) => link_err(format!(
+                "{msg} (board on {} at {} Bd)",
+                opts.path.display(),
+                opts.baud_rate
+            )),
+        }
+    }
+
+    /// After `Stop`: QEMU must exit with success; a board resets by itself.
+    pub(super) fn wait_success(&mut self, timeout: Duration) -> Result<(), ControllerError> {
+        match self {
+            Peer::Qemu(q) => q.wait_success(timeout),
+            Peer::Board(_) => Ok(()),
+        }
+    }
+
+    /// The raw defmt log so far (a board logs over RTT instead: empty).
+    pub(super) fn log(&self) -> Vec<u8> {
+        match self {
+            Peer::Qemu(q) => q.log(),
+            Peer::Board(_) => Vec::new(),
+        }
+    }
+
+    /// QEMU's process id; 0 for a board.
+    pub(super) fn pid(&self) -> u32 {
+        match self {
+            Peer::Qemu(q) => q.pid(),
+            Peer::Board(_) => 0,
+        }
+    }
+
+    /// The peer in words, for a timeout message.
+    pub(super) fn describe(&self, link: LinkKind) -> String {
+        match self {
+            Peer::Qemu(_) => format!("{link:?} link, QEMU still running"),
+            Peer::Board(opts) => format!("board on {}", opts.path.display()),
         }
     }
 }

@@ -1,10 +1,11 @@
-//! [`LockStep`]: the firmware in QEMU as a [`StepController`] of any controller kind.
+//! [`LockStep`]: the firmware in QEMU, or on a board on a serial port, as a
+//! [`StepController`] of any controller kind.
 
 use super::inject::{Injector, Segment};
-use super::link::{prepare, Link, Received};
+use super::link::{prepare, Link, Peer, Received};
 use super::qemu::{check_qemu, decode_defmt_log, link_err, resolve_firmware, Qemu, WorkDir};
 use super::report::{Counters, LinkCounts};
-use super::{HilOptions, LOCKSTEP_TIMEOUT_PERIODS};
+use super::{HilOptions, StepBudget, LOCKSTEP_TIMEOUT_PERIODS};
 use crate::controller::{ControllerError, HilReport, StepController, StepOutput};
 use dexter_core::control::Controller;
 use dexter_core::fixed_rate::Reply;
@@ -40,7 +41,7 @@ impl std::fmt::Display for Awaited {
 /// The firmware in QEMU, stepped in lock-step with the plant, running a controller of kind
 /// `C` and checked against a shadow `C` on the host, bit for bit.
 pub struct LockStep<C: Wire = Controller> {
-    qemu: Qemu,
+    peer: Peer,
     link: Link,
     /// The ELF QEMU runs (absolute).
     elf: PathBuf,
@@ -60,14 +61,18 @@ pub struct LockStep<C: Wire = Controller> {
     first_mismatch: Option<String>,
 }
 
-/// Boot QEMU with the link's host end ready, and connect.
-fn boot(elf: &std::path::Path, opts: &HilOptions) -> Result<(Qemu, Link), ControllerError> {
+/// Boot QEMU with the link's host end ready, and connect; or open the board's serial port.
+fn boot(elf: &std::path::Path, opts: &HilOptions) -> Result<(Peer, Link), ControllerError> {
+    if let Some(port) = &opts.serial {
+        let link = Link::serial(port, opts.timeout)?;
+        return Ok((Peer::Board(port.clone()), link));
+    }
     check_qemu()?;
     let workdir = WorkDir::create()?;
     let (pending, link_args) = prepare(opts.link, &workdir)?;
     let mut qemu = Qemu::spawn(elf, opts.link, workdir, &link_args)?;
     let link = Link::connect(pending, &mut qemu, opts.timeout)?; // QEMU is killed on error
-    Ok((qemu, link))
+    Ok((Peer::Qemu(qemu), link))
 }
 
 impl<C: Wire> LockStep<C> {
@@ -83,10 +88,20 @@ impl<C: Wire> LockStep<C> {
                 opts.corrupt_rate
             )));
         }
-        let elf = resolve_firmware(&opts.firmware_elf)?;
-        let (qemu, link) = boot(&elf, &opts)?;
+        // A board runs the firmware it was flashed with: no ELF to find.
+        let elf = match opts.serial {
+            Some(_) => opts.firmware_elf.clone(),
+            None => resolve_firmware(&opts.firmware_elf)?,
+        };
+        let (peer, link) = boot(&elf, &opts)?;
+        // A board reports DWT cycles, not instructions: the controller's instruction budget
+        // does not apply to them (an explicit budget does, in cycles).
+        let budget = match (&opts.serial, opts.instruction_budget) {
+            (Some(_), StepBudget::OfController) => None,
+            (_, budget) => budget.limit(C::STEP_INSTRUCTION_BUDGET),
+        };
         let mut hil = LockStep {
-            qemu,
+            peer,
             link,
             elf,
             replies: VecDeque::with_capacity(16),
@@ -96,7 +111,7 @@ impl<C: Wire> LockStep<C> {
             last_seq: 0,
             missed: 0,
             shadow,
-            budget: opts.instruction_budget.limit(C::STEP_INSTRUCTION_BUDGET),
+            budget,
             opts,
             counters: Counters::default(),
             last_output: None,
@@ -146,7 +161,7 @@ impl<C: Wire> LockStep<C> {
 
     fn write(&mut self, bytes: &[u8]) -> Result<(), ControllerError> {
         self.link.write_all(bytes).map_err(|e| {
-            self.qemu
+            self.peer
                 .dead_or(format!("writing to the firmware failed: {e}"))
         })
     }
@@ -177,22 +192,23 @@ impl<C: Wire> LockStep<C> {
                     }
                     return Ok(());
                 }
-                Ok(Received::Nothing) if self.qemu.exited().is_some() => {
-                    return Err(self.qemu.dead_or(format!(
+                Ok(Received::Nothing) if self.peer.exited().is_some() => {
+                    return Err(self.peer.dead_or(format!(
                         "the firmware stopped while waiting for {waiting_for}"
                     )))
                 }
                 Ok(Received::Nothing) if left.is_zero() => {
-                    return Err(self.qemu.dead_or(format!(
+                    let peer = self.peer.describe(self.opts.link);
+                    return Err(self.peer.dead_or(format!(
                         "timeout: no answer from the firmware within {:?} while waiting for \
-                         {waiting_for} ({:?} link, QEMU still running)",
-                        self.opts.timeout, self.opts.link
-                    )))
+                         {waiting_for} ({peer})",
+                        self.opts.timeout
+                    )));
                 }
                 Ok(Received::Nothing) => {}
                 Err(e) => {
                     return Err(self
-                        .qemu
+                        .peer
                         .dead_or(format!("{e} while waiting for {waiting_for}")))
                 }
             }
@@ -316,19 +332,24 @@ impl<C: Wire> LockStep<C> {
         self.counters.link
     }
 
-    /// The raw defmt log so far (semihosting stdout); decode with the firmware ELF.
+    /// The raw defmt log so far (semihosting stdout); decode with the firmware ELF. Empty
+    /// for a board (it logs over RTT: probe-rs prints it).
     pub fn firmware_log(&self) -> Vec<u8> {
-        self.qemu.log()
+        self.peer.log()
     }
 
-    /// The firmware log so far, decoded (see [`decode_defmt_log`]).
+    /// The firmware log so far, decoded (see [`decode_defmt_log`]); empty for a board.
     pub fn firmware_log_text(&self) -> Result<String, ControllerError> {
-        decode_defmt_log(&self.elf, &self.firmware_log())
+        match self.peer {
+            Peer::Board(_) => Ok(String::new()),
+            Peer::Qemu(_) => decode_defmt_log(&self.elf, &self.firmware_log()),
+        }
     }
 
-    /// Process id of the QEMU instance (it is killed when the `LockStep` is dropped).
+    /// Process id of the QEMU instance (it is killed when the `LockStep` is dropped); 0
+    /// for a board on a serial port.
     pub fn qemu_pid(&self) -> u32 {
-        self.qemu.pid()
+        self.peer.pid()
     }
 
     /// The options this run uses.
@@ -362,7 +383,7 @@ impl<C: Wire> LockStep<C> {
                 }
             }
         };
-        self.qemu.wait_success(self.opts.timeout)?;
+        self.peer.wait_success(self.opts.timeout)?;
         Ok((self.counters.report(), summary))
     }
 }

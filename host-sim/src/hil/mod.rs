@@ -41,8 +41,9 @@
 //! - [`LinkKind::Uart`]: the board's CMSDK UART0 (the real driver path, receive interrupt
 //!   into a ring buffer), attached by QEMU to a loopback TCP socket this process listens on.
 //!
-//! A real board on a serial port is the next link: one more `Io` variant in `link.rs`
-//! (a file descriptor read with `poll`, like the FIFO) and no QEMU process.
+//! - A real board on a serial port ([`HilOptions::serial`], [`serial`]): no QEMU; the
+//!   board's USART (e.g. the NUCLEO-F446RE's ST-LINK virtual COM port), read with `poll`
+//!   like the FIFO. The CLI: `dexter run SCENE --hil --port /dev/ttyACM0`.
 //!
 //! ## Link faults
 //! With [`HilOptions::corrupt_rate`] > 0 each host-to-device byte of a sensor frame
@@ -76,6 +77,7 @@ mod link;
 mod lockstep;
 pub mod qemu;
 mod report;
+pub mod serial;
 
 pub use lockstep::LockStep;
 pub use qemu::{
@@ -83,6 +85,7 @@ pub use qemu::{
     default_firmware_elf, workspace_root,
 };
 pub use report::LinkCounts;
+pub use serial::SerialPortOptions;
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -167,6 +170,9 @@ pub struct HilOptions {
     pub corrupt_rate: f64,
     /// Longest wait for one answer from the firmware (and for QEMU to start or exit).
     pub timeout: Duration,
+    /// A real board on this serial port instead of QEMU (`firmware_elf` and `link` are then
+    /// unused; the step figures are DWT cycles, see [`serial`]).
+    pub serial: Option<SerialPortOptions>,
 }
 
 impl Default for HilOptions {
@@ -177,6 +183,7 @@ impl Default for HilOptions {
             instruction_budget: StepBudget::OfController,
             corrupt_rate: 0.0,
             timeout: Duration::from_secs(10),
+            serial: None,
         }
     }
 }

@@ -1,9 +1,10 @@
-//! Models: plants assembled from a scene with only the enabled effects.
-//!
-//! [`assemble`](crate::run::run_scene) matches on the scene's model and effect switches once
-//! and calls generic code monomorphized for that combination; new models (planar, hopper)
-//! add a variant to [`crate::scene::Model`] and a module here.
+//! Models: the physics of each system (plants, exact events, analysis), free of scenes,
+//! files and the CLI. A system in [`crate::systems`] assembles its plant from a scene with
+//! only the enabled effects (the line juggler: [`crate::systems::line::assemble`]); a new
+//! system adds its module here (`docs/adding-a-system.md`).
 
+pub mod arm;
+pub mod feeder;
 pub mod hopper;
 pub mod line;
 pub mod planar;

@@ -23,6 +23,11 @@ pub fn parse_set(arg: &str) -> Result<(String, toml::Value), SceneError> {
     Ok((key.to_string(), value))
 }
 
+/// Parse every `--set` argument ([`parse_set`]); the first bad one is the error.
+pub fn parse_sets(args: &[String]) -> Result<Vec<(String, toml::Value)>, SceneError> {
+    args.iter().map(|s| parse_set(s)).collect()
+}
+
 /// Set `key` (dotted) to `value` in `table`, creating intermediate tables.
 pub fn apply_set(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), SceneError> {
     let mut parts: Vec<&str> = key.split('.').collect();

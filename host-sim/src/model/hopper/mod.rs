@@ -458,6 +458,20 @@ impl Hopper {
         self.run_inner(start, cycles, opts, None, on_cycle)
     }
 
+    /// [`Hopper::run`], also collecting the dense samples [`RunOptions::samples_per_phase`]
+    /// asks for into `samples` (at most [`MAX_SAMPLES`] per run): a run of any length in
+    /// bounded memory, with its phase portrait.
+    pub fn run_with_samples(
+        &self,
+        start: Start,
+        cycles: usize,
+        opts: &RunOptions,
+        samples: &mut Vec<Sample>,
+        on_cycle: &mut impl FnMut(&Cycle),
+    ) -> Result<(RunEnd, u64), HopperError> {
+        self.run_inner(start, cycles, opts, Some(samples), on_cycle)
+    }
+
     fn run_inner(
         &self,
         start: Start,

@@ -631,6 +631,7 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
                 Fault::OutOfRange => s.out_of_range += 1,
                 Fault::Stale => s.stale += 1,
                 Fault::LinkTimeout => s.link_timeout += 1,
+                Fault::Overrun => s.overrun += 1,
                 Fault::None => {}
             }
         }

@@ -97,12 +97,14 @@ pub struct SafeSteps {
     pub stale: u64,
     /// The link timed out (HIL).
     pub link_timeout: u64,
+    /// The control period's work overran (a board's fixed-rate loop).
+    pub overrun: u64,
 }
 
 impl SafeSteps {
     /// All safe steps.
     pub fn total(&self) -> u64 {
-        self.non_finite + self.out_of_range + self.stale + self.link_timeout
+        self.non_finite + self.out_of_range + self.stale + self.link_timeout + self.overrun
     }
 }
 

@@ -475,6 +475,8 @@ pub struct FaultCounts {
     pub stale: u64,
     /// [`Fault::LinkTimeout`].
     pub link_timeout: u64,
+    /// [`Fault::Overrun`] (a board's fixed-rate loop).
+    pub overrun: u64,
 }
 
 /// Everything a sampled run produced.
@@ -777,6 +779,7 @@ impl Counters {
             Fault::OutOfRange => f.out_of_range += 1,
             Fault::Stale => f.stale += 1,
             Fault::LinkTimeout => f.link_timeout += 1,
+            Fault::Overrun => f.overrun += 1,
         }
         self.safe_steps += 1;
     }

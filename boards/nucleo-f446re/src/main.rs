@@ -1,0 +1,262 @@
+//! dexter on a NUCLEO-F446RE (STM32F446RE, Cortex-M4F at 180 MHz), an RTIC 2 app.
+//!
+//! Two ways to run, chosen by the virtual COM port (USART2, the ST-LINK's VCP):
+//! - **juggling** (from reset): TIM2's update interrupt runs one control period at
+//!   [`CONTROL_RATE_HZ`] (hardware task `control`, priority 2): the rig's sensors (encoder,
+//!   camera), the core's line-juggler `step` (the same `dexter_core::control::Controller`
+//!   the simulator and the QEMU image run), the motor; the period's deadline is checked and
+//!   an overrun answered with the core's safe command (`dexter_drivers::periodic`). Once a
+//!   second the period task hands a snapshot to `telemetry` (software task, priority 1),
+//!   which logs it with defmt over RTT.
+//! - **hardware in the loop**: the first byte a host sends on the VCP ends the juggling
+//!   loop for good (the motor is parked, duty 0, and TIM2 stops): `idle` runs the
+//!   board-neutral lock-step server (`dexter_firmware::server::Server`) on the VCP, exactly
+//!   as the QEMU image does, and the host's simulated plant closes the loop
+//!   (`dexter run SCENE --hil --port /dev/ttyACM0`). After the host's `Stop` the board
+//!   resets, back to juggling.
+//!
+//! The receive interrupts of both UARTs (priority 3) only move bytes into rings.
+#![no_std]
+#![no_main]
+#![deny(unsafe_op_in_unsafe_fn)]
+
+use defmt_rtt as _; // global logger: defmt over RTT, read by probe-rs
+use panic_probe as _; // panics print through defmt, then `udf` (a HardFault the probe sees)
+
+mod fault;
+mod report;
+mod rig;
+mod tick;
+mod uart_ring;
+
+use core::sync::atomic::AtomicBool;
+
+/// The control rate of the juggling loop, Hz: the line controller's `dt_s` must be its
+/// inverse (checked at start).
+pub const CONTROL_RATE_HZ: u32 = 500;
+/// Core clock, Hz (HSE 8 MHz from the ST-LINK's MCO, PLL to the F446's 180 MHz maximum).
+pub const SYSCLK_HZ: u32 = 180_000_000;
+/// The host link's rate, Bd (the ST-LINK/V2-1 VCP carries up to 2 MBd).
+pub const VCP_BAUD: u32 = 921_600;
+
+/// Set by the VCP's receive interrupt at the first byte: a host drives the board from now.
+static HOST_SESSION: AtomicBool = AtomicBool::new(false);
+
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [SPI1])]
+mod app {
+    use crate::report::Report;
+    use crate::rig::{self, BoardRig, Tim3Encoder, CAMERA_BAUD, PWM_HZ};
+    use crate::tick::TickClock;
+    use crate::uart_ring::{self, ErrorCount, RingLink, RingReader, RX_RING_LEN};
+    use crate::{CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD};
+    use core::sync::atomic::Ordering;
+    use dexter_core::control::{Controller, ControllerParams};
+    use dexter_drivers::periodic::{Deadline, Periodic};
+    use dexter_drivers::rig::Rig;
+    use dexter_firmware::board::DwtCycles;
+    use dexter_firmware::ring::{ByteRing, Producer};
+    use dexter_firmware::server::Server;
+    use stm32f4xx_hal::pac::{TIM2, USART1, USART2};
+    use stm32f4xx_hal::prelude::*;
+    use stm32f4xx_hal::rcc::Config as Clocks;
+    use stm32f4xx_hal::serial::{Config as SerialConfig, Rx, Serial};
+    use stm32f4xx_hal::timer::{CounterHz, Event, Flag};
+
+    static VCP_RING: ByteRing<RX_RING_LEN> = ByteRing::new();
+    static CAMERA_RING: ByteRing<RX_RING_LEN> = ByteRing::new();
+    static VCP_ERRORS: ErrorCount = ErrorCount::new();
+    static CAMERA_ERRORS: ErrorCount = ErrorCount::new();
+
+    #[shared]
+    struct Shared {
+        report: Report,
+    }
+
+    #[local]
+    struct Local {
+        periodic: Periodic<Controller>,
+        rig: BoardRig,
+        tick: CounterHz<TIM2>,
+        steps: DwtCycles,
+        vcp_rx: Rx<USART2, u8>,
+        vcp_ring: Producer<'static, RX_RING_LEN>,
+        camera_rx: Rx<USART1, u8>,
+        camera_ring: Producer<'static, RX_RING_LEN>,
+        server: Server<RingLink<USART2>, DwtCycles>,
+    }
+
+    #[init]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        let mut core = cx.core;
+        let dp = cx.device;
+        let clocks = Clocks::hse(8.MHz())
+            .bypass_hse_oscillator()
+            .sysclk(SYSCLK_HZ.Hz());
+        let mut rcc = dp.RCC.freeze(clocks);
+        let steps = DwtCycles::new(&mut core.DCB, &mut core.DWT);
+        let server_steps = DwtCycles::new(&mut core.DCB, &mut core.DWT);
+        let gpioa = dp.GPIOA.split(&mut rcc);
+        let gpiob = dp.GPIOB.split(&mut rcc);
+
+        let (Some((vcp_ring, vcp_consumer)), Some((camera_ring, camera_consumer))) =
+            (uart_ring::split(&VCP_RING), uart_ring::split(&CAMERA_RING))
+        else {
+            defmt::panic!("receive rings split twice")
+        };
+        let vcp_config = SerialConfig::default().baudrate(VCP_BAUD.bps());
+        let Ok(mut vcp) = Serial::new(dp.USART2, (gpioa.pa2, gpioa.pa3), vcp_config, &mut rcc)
+        else {
+            defmt::panic!("USART2 cannot run at {=u32} Bd", VCP_BAUD)
+        };
+        vcp.listen(stm32f4xx_hal::serial::Event::RxNotEmpty);
+        let (vcp_tx, vcp_rx) = vcp.split();
+        let camera_config = SerialConfig::default().baudrate(CAMERA_BAUD.bps());
+        let Ok(mut camera_rx) = Serial::rx(dp.USART1, gpioa.pa10, camera_config, &mut rcc) else {
+            defmt::panic!("USART1 cannot run at {=u32} Bd", CAMERA_BAUD)
+        };
+        camera_rx.listen();
+
+        let (_, (pwm, ..)) = dp.TIM1.pwm_hz(PWM_HZ.Hz(), &mut rcc);
+        let mut pwm = pwm.with(gpioa.pa8);
+        pwm.enable();
+        let dir = gpiob.pb5.into_push_pull_output();
+        let encoder = Tim3Encoder(dp.TIM3.qei((gpioa.pa6, gpioa.pa7), &mut rcc));
+
+        let params = ControllerParams::default();
+        let (rig, periodic) = juggler(
+            params,
+            encoder,
+            RingReader::new(camera_consumer, &CAMERA_ERRORS),
+            pwm,
+            dir,
+        );
+        let mut tick = dp.TIM2.counter_hz(&mut rcc);
+        if tick.start(CONTROL_RATE_HZ.Hz()).is_err() {
+            defmt::panic!("TIM2 cannot tick at {=u32} Hz", CONTROL_RATE_HZ);
+        }
+        tick.listen(Event::Update);
+        defmt::info!(
+            "dexter {=str} on NUCLEO-F446RE: sysclk {=u32} Hz, line juggler at {=u32} Hz on TIM2, host link USART2 at {=u32} Bd",
+            env!("CARGO_PKG_VERSION"),
+            rcc.clocks.sysclk().raw(),
+            CONTROL_RATE_HZ,
+            VCP_BAUD
+        );
+        let server = Server::new(RingLink::new(vcp_consumer, vcp_tx), server_steps);
+        let shared = Shared {
+            report: Report::default(),
+        };
+        let local = Local {
+            periodic,
+            rig,
+            tick,
+            steps,
+            vcp_rx,
+            vcp_ring,
+            camera_rx,
+            camera_ring,
+            server,
+        };
+        (shared, local)
+    }
+
+    /// The juggling loop's controller and rig; a calibration or parameter the drivers or
+    /// the core refuse stops the board here, with the reason in the log.
+    fn juggler(
+        params: ControllerParams,
+        encoder: Tim3Encoder,
+        camera: RingReader,
+        pwm: rig::MotorPwm,
+        dir: rig::MotorDir,
+    ) -> (BoardRig, Periodic<Controller>) {
+        let rate_error = (params.dt_s * CONTROL_RATE_HZ as f32 - 1.0).abs();
+        if rate_error > 1e-6 {
+            defmt::panic!(
+                "the controller's dt_s {=f32} s is not 1/{=u32} Hz",
+                params.dt_s,
+                CONTROL_RATE_HZ
+            );
+        }
+        let rig = match rig::rig(encoder, camera, pwm, dir, params.dt_s) {
+            Ok(rig) => rig,
+            Err(e) => defmt::panic!("rig calibration refused: {}", e),
+        };
+        let controller = match Controller::new(params) {
+            Ok(c) => c,
+            Err(e) => defmt::panic!("controller parameters refused: {}", e),
+        };
+        let Some(periodic) = Periodic::new(controller, SYSCLK_HZ / CONTROL_RATE_HZ) else {
+            defmt::panic!("zero control period")
+        };
+        (rig, periodic)
+    }
+
+    /// The host link's receive interrupt: bytes into the ring; the first one starts a
+    /// host session.
+    #[task(binds = USART2, priority = 3, local = [vcp_rx, vcp_ring])]
+    fn vcp_receive(cx: vcp_receive::Context) {
+        uart_ring::on_receive(cx.local.vcp_rx, cx.local.vcp_ring, &VCP_ERRORS);
+        HOST_SESSION.store(true, Ordering::Relaxed);
+    }
+
+    /// The camera's receive interrupt: bytes into the ring.
+    #[task(binds = USART1, priority = 3, local = [camera_rx, camera_ring])]
+    fn camera_receive(cx: camera_receive::Context) {
+        uart_ring::on_receive(cx.local.camera_rx, cx.local.camera_ring, &CAMERA_ERRORS);
+    }
+
+    /// One control period on TIM2's tick (see the crate docs).
+    #[task(binds = TIM2, priority = 2, local = [periodic, rig, tick, steps], shared = [report])]
+    fn control(mut cx: control::Context) {
+        let local = cx.local;
+        if HOST_SESSION.load(Ordering::Relaxed) {
+            local.tick.clear_flags(Flag::Update);
+            local.tick.unlisten(Event::Update);
+            if local.rig.park().is_err() {
+                defmt::error!("the motor could not be parked");
+            }
+            defmt::info!(
+                "a host is on the VCP: juggling loop stopped, motor parked, lock-step HIL"
+            );
+            return;
+        }
+        let mut clock = TickClock::take(local.steps, local.tick);
+        let out = local.periodic.period(local.rig, &mut clock);
+        let stats = local.periodic.stats();
+        if let Deadline::Overrun { ticks_lost } = out.deadline {
+            if stats.overruns.is_power_of_two() {
+                defmt::warn!(
+                    "overrun #{=u32}: the period's work ran past the next tick ({=u32} ticks lost); safe command sent",
+                    stats.overruns,
+                    ticks_lost
+                );
+            }
+        }
+        let report = Report::new(local.periodic, local.rig, &out, VCP_ERRORS.get());
+        cx.shared.report.lock(|r| *r = report);
+        if stats.periods.is_multiple_of(CONTROL_RATE_HZ) {
+            let _ = telemetry::spawn(); // still busy with the last one: skip a report
+        }
+    }
+
+    /// Once a second: the loop's figures in the log.
+    #[task(priority = 1, shared = [report])]
+    async fn telemetry(mut cx: telemetry::Context) {
+        let report = cx.shared.report.lock(|r| *r);
+        report.log();
+    }
+
+    /// The lock-step server on the VCP: it blocks (in `wfi`) until a host sends frames.
+    #[idle(local = [server])]
+    fn idle(cx: idle::Context) -> ! {
+        let server = cx.local.server;
+        let exit = server.run();
+        let stats = server.stats();
+        defmt::info!(
+            "host session ended: {} after {=u32} steps; resetting",
+            exit,
+            stats.steps
+        );
+        cortex_m::peripheral::SCB::sys_reset()
+    }
+}

@@ -1,0 +1,160 @@
+//! A UART's receive interrupt into a [`ByteRing`], and the two ways the main code reads it:
+//! [`RingLink`], a byte stream (`embedded_io::{Read, ReadReady, Write}`) for the protocol
+//! server on the virtual COM port, and [`RingReader`], a non-blocking
+//! `embedded_hal_nb::serial::Read<u8>` for the ball camera's parser.
+//!
+//! The STM32's USART holds one received byte: at 921 600 Bd a byte arrives every 11 us, so
+//! the receive interrupt (the highest priority in the app, a few dozen cycles) moves each
+//! byte into the ring at once, and nothing else has to keep up with the line.
+
+use core::sync::atomic::{AtomicU32, Ordering};
+use dexter_firmware::ring::{ByteRing, Consumer, Producer};
+use embedded_hal_nb::nb;
+use embedded_hal_nb::serial::{ErrorKind, Read as NbRead, Write as NbWrite};
+use stm32f4xx_hal::serial::{Error, Instance, Rx, Tx};
+
+/// Receive ring length, bytes (power of two; one slot stays free).
+pub const RX_RING_LEN: usize = 256;
+/// Most bytes (or errors) one receive interrupt handles before returning.
+const MAX_BYTES_PER_INTERRUPT: usize = 16;
+
+/// Counts a UART's receive errors (overrun, framing, noise, parity).
+pub struct ErrorCount(AtomicU32);
+
+impl ErrorCount {
+    /// Zero.
+    pub const fn new() -> Self {
+        Self(AtomicU32::new(0))
+    }
+
+    /// Errors so far.
+    pub fn get(&self) -> u32 {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// The receive interrupt's body: move what the USART holds into the ring; count errors
+/// (reading the data register after the status clears them).
+pub fn on_receive<U: Instance>(
+    rx: &mut Rx<U, u8>,
+    ring: &mut Producer<'static, RX_RING_LEN>,
+    errors: &ErrorCount,
+) {
+    for _ in 0..MAX_BYTES_PER_INTERRUPT {
+        match rx.read() {
+            Ok(byte) => ring.push(byte),
+            Err(nb::Error::WouldBlock) => break,
+            Err(nb::Error::Other(_)) => {
+                errors.0.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+    }
+}
+
+/// The protocol server's link: the ring's consumer, and the USART's transmitter.
+pub struct RingLink<U: Instance> {
+    rx: Consumer<'static, RX_RING_LEN>,
+    tx: Tx<U, u8>,
+}
+
+impl<U: Instance> RingLink<U> {
+    /// The link from its two halves.
+    pub fn new(rx: Consumer<'static, RX_RING_LEN>, tx: Tx<U, u8>) -> Self {
+        Self { rx, tx }
+    }
+}
+
+impl<U: Instance> embedded_io::ErrorType for RingLink<U> {
+    type Error = Error;
+}
+
+impl<U: Instance> embedded_io::Read for RingLink<U> {
+    /// Blocks, sleeping in `wfi`, until at least one byte arrived.
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Error> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        loop {
+            let mut n = 0;
+            for slot in buf.iter_mut() {
+                let Some(b) = self.rx.pop() else { break };
+                *slot = b;
+                n += 1;
+            }
+            if n > 0 {
+                return Ok(n);
+            }
+            // Masked, so a byte that arrives between the check and `wfi` still wakes it.
+            cortex_m::interrupt::free(|_| {
+                if self.rx.is_empty() {
+                    cortex_m::asm::wfi();
+                }
+            });
+        }
+    }
+}
+
+impl<U: Instance> embedded_io::ReadReady for RingLink<U> {
+    fn read_ready(&mut self) -> Result<bool, Error> {
+        Ok(!self.rx.is_empty())
+    }
+}
+
+impl<U: Instance> embedded_io::Write for RingLink<U> {
+    /// Writes every byte, waiting for the transmitter (the HAL's own `embedded_io::Write`
+    /// returns `Ok(0)` while it is busy, which the server counts as a dead link).
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Error> {
+        for &b in buf {
+            nb::block!(NbWrite::write(&mut self.tx, b))?;
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> Result<(), Error> {
+        nb::block!(NbWrite::flush(&mut self.tx))
+    }
+}
+
+/// A non-blocking reader of the ring for a byte parser: a byte, `WouldBlock`, or one
+/// `Overrun` error for each receive error the interrupt counted since the last read.
+pub struct RingReader {
+    rx: Consumer<'static, RX_RING_LEN>,
+    errors: &'static ErrorCount,
+    errors_reported: u32,
+}
+
+impl RingReader {
+    /// The reader of `rx`, reporting the errors `errors` counts.
+    pub fn new(rx: Consumer<'static, RX_RING_LEN>, errors: &'static ErrorCount) -> Self {
+        Self {
+            rx,
+            errors,
+            errors_reported: errors.get(),
+        }
+    }
+}
+
+impl embedded_hal_nb::serial::ErrorType for RingReader {
+    type Error = ErrorKind;
+}
+
+impl NbRead<u8> for RingReader {
+    fn read(&mut self) -> nb::Result<u8, ErrorKind> {
+        if self.errors_reported != self.errors.get() {
+            self.errors_reported = self.errors_reported.wrapping_add(1);
+            return Err(nb::Error::Other(ErrorKind::Overrun));
+        }
+        self.rx.pop().ok_or(nb::Error::WouldBlock)
+    }
+}
+
+/// The receive ring of a UART, split once into its interrupt's producer and its reader's
+/// consumer; `None` if it was split before.
+pub fn split(
+    ring: &'static ByteRing<RX_RING_LEN>,
+) -> Option<(
+    Producer<'static, RX_RING_LEN>,
+    Consumer<'static, RX_RING_LEN>,
+)> {
+    ring.split()
+}

@@ -1,0 +1,31 @@
+//! # dexter-drivers
+//!
+//! The board-independent layer between a microcontroller's HAL and the control core
+//! ([`dexter_core`]): drivers written against the embedded-hal 1.0 traits, so a board
+//! supplies HAL objects and the control code never names a register.
+//!
+//! - [`actuator`]: the paddle's DC motor as PWM duty plus a direction pin
+//!   (`embedded_hal::pwm::SetDutyCycle`, `embedded_hal::digital::OutputPin`), driven from
+//!   the core's acceleration command through a linear motor model;
+//! - [`encoder`]: the paddle's position from a quadrature-encoder timer
+//!   ([`encoder::QuadratureCounter`], with wrap handling);
+//! - [`camera`]: the ball's measurement from a serial camera's frames
+//!   (`embedded_hal_nb::serial::Read<u8>`), a resynchronising byte parser;
+//! - [`rig`]: the sensors and actuators one controller kind closes its loop through
+//!   ([`rig::Rig`]); [`rig::LineRig`] for the line juggler;
+//! - [`periodic`]: one fixed-rate control period on a hardware tick: the core's
+//!   `FixedRate::step`, overrun detection, and the core's safe state on an overrun.
+//!
+//! Everything here is tested on the host against `embedded-hal-mock` (`cargo test -p
+//! dexter-drivers`); the board crates (`boards/`) only construct HAL objects and call in.
+#![cfg_attr(not(test), no_std)]
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod actuator;
+pub mod camera;
+pub mod encoder;
+pub mod periodic;
+pub mod rig;
+
+pub use actuator::ConfigError;

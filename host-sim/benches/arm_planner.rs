@@ -1,0 +1,51 @@
+//! The arm planner's cost: B-spline knots vs solver iterations vs wall time vs the mu
+//! found, for the throw (gf) and the fig. 2 roll (grg). Before timing, each configuration
+//! is planned once and its row is printed (knots, iterations, evaluations, mu, wall time),
+//! so `cargo bench -p dexter-sim --bench arm_planner` prints the table as well.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use dexter_sim::model::arm::examples;
+use dexter_sim::model::arm::params::ArmConfig;
+use dexter_sim::model::arm::planner::plan;
+use std::hint::black_box;
+use std::time::Duration;
+
+fn with_knots(text: &str, knots: usize) -> String {
+    if text.contains("[planner]") {
+        text.replace("knots = 9", &format!("knots = {knots}"))
+    } else {
+        format!("{text}\n[planner]\nknots = {knots}\n")
+    }
+}
+
+fn planner(c: &mut Criterion) {
+    let mut g = c.benchmark_group("arm_planner");
+    g.sample_size(10);
+    g.measurement_time(Duration::from_secs(20));
+    g.warm_up_time(Duration::from_millis(100));
+    eprintln!("task | knots | iterations | evaluations | mu | wall time (s)");
+    for (task, text, knots) in [
+        ("throw", examples::THROW, &[5usize, 7, 9, 12][..]),
+        ("roll", examples::ROLL, &[7usize, 9, 11, 13][..]),
+    ] {
+        for &n in knots {
+            let sys = ArmConfig::from_toml_str(&with_knots(text, n))
+                .and_then(|c| c.validate())
+                .expect("bench scene");
+            match plan(&sys) {
+                Ok(p) => eprintln!(
+                    "{task} | {n} | {} | {} | {:.4} | {:.2}",
+                    p.iterations, p.evaluations, p.mu, p.wall_time_s
+                ),
+                Err(e) => eprintln!("{task} | {n} | no plan: {e}"),
+            }
+            g.bench_function(format!("{task}/{n}_knots"), |b| {
+                b.iter(|| plan(black_box(&sys)).map(|p| p.mu).unwrap_or(f64::NAN))
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, planner);
+criterion_main!(benches);

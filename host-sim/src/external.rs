@@ -1,0 +1,104 @@
+//! Controllers outside the simulator: the firmware in QEMU (`--hil`), behind the same
+//! [`StepController`] a plant steps in SIL.
+//!
+//! **This is the one place the CLI reaches the HIL driver** ([`crate::hil`]). A system
+//! names its controller kind ([`crate::systems::System::Controller`]); `--hil` starts that
+//! kind on the target through [`OnTarget::start`] (for every kind the protocol carries,
+//! [`Wire`]: `crate::hil::LockStep::<C>::start`), the plant steps it like the core linked
+//! in, and [`Target::finish`] stops it and returns the [`HilReport`]. A new controller kind
+//! the firmware hosts needs nothing here.
+
+use crate::controller::{ControllerError, HilReport, StepController};
+use crate::systems::NoController;
+use crate::verbs::Failure;
+use dexter_core::fixed_rate::FixedRate;
+use dexter_core::protocol::Wire;
+use std::path::PathBuf;
+
+/// The plant link to the firmware.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum HilLink {
+    /// Semihosting file I/O (fast; the default).
+    #[default]
+    Semihosting,
+    /// The board's UART on a TCP socket (the real driver path; slow in QEMU).
+    Uart,
+}
+
+/// `--hil` and its options as given on the command line.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HilRequest {
+    /// `--firmware PATH` (relative to the current directory), else the release build.
+    pub firmware: Option<PathBuf>,
+    /// `--link`.
+    pub link: Option<HilLink>,
+    /// `--budget N` instructions per step (0 = none).
+    pub budget: Option<u32>,
+    /// `--corrupt-rate F`, in [0, 1].
+    pub corrupt_rate: Option<f64>,
+    /// `--port PATH`: a real board on this serial port instead of QEMU.
+    pub port: Option<PathBuf>,
+}
+
+/// A controller of kind `C` running on a target.
+pub trait Target<C: FixedRate>: StepController<C> {
+    /// Stop it and report its timing and link figures.
+    fn finish(self: Box<Self>) -> Result<HilReport, ControllerError>;
+}
+
+/// A controller kind that can run on the target.
+pub trait OnTarget: FixedRate + 'static {
+    /// Start the firmware hosting this kind with `params`.
+    fn start(params: Self::Params, req: &HilRequest) -> Result<Box<dyn Target<Self>>, Failure>;
+}
+
+impl<C: Wire> Target<C> for crate::hil::LockStep<C> {
+    fn finish(self: Box<Self>) -> Result<HilReport, ControllerError> {
+        crate::hil::LockStep::finish(*self)
+    }
+}
+
+impl<C: Wire + 'static> OnTarget for C {
+    fn start(params: Self::Params, req: &HilRequest) -> Result<Box<dyn Target<Self>>, Failure> {
+        let opts = hil_options(req)?;
+        let lock = crate::hil::LockStep::<C>::start(params, opts).map_err(Failure::run)?;
+        Ok(Box::new(lock))
+    }
+}
+
+impl OnTarget for NoController {
+    fn start(_: (), _: &HilRequest) -> Result<Box<dyn Target<Self>>, Failure> {
+        Err(Failure::usage(
+            "--hil: this system has no controller that runs on a target",
+        ))
+    }
+}
+
+/// The HIL driver's options from the request: the firmware path made absolute (QEMU runs
+/// in a directory of its own), the corruption rate checked.
+fn hil_options(req: &HilRequest) -> Result<crate::hil::HilOptions, Failure> {
+    let mut opts = crate::hil::HilOptions::default();
+    if let Some(p) = &req.firmware {
+        opts.firmware_elf = std::path::absolute(p)
+            .map_err(|e| Failure::usage(format!("--firmware {}: {e}", p.display())))?;
+    }
+    if let Some(l) = req.link {
+        opts.link = match l {
+            HilLink::Semihosting => crate::hil::LinkKind::Semihosting,
+            HilLink::Uart => crate::hil::LinkKind::Uart,
+        };
+    }
+    if let Some(b) = req.budget {
+        opts.instruction_budget = (b > 0).then_some(b).into();
+    }
+    if let Some(r) = req.corrupt_rate {
+        if !(0.0..=1.0).contains(&r) {
+            return Err(Failure::usage(format!(
+                "--corrupt-rate must be in [0, 1], got {r}"
+            )));
+        }
+        opts.corrupt_rate = r;
+    }
+    opts.serial = req.port.clone().map(crate::hil::SerialPortOptions::new);
+    Ok(opts)
+}

@@ -1,0 +1,223 @@
+//! Planning as constrained optimization (sec. 2.1-2.4): the design variables are the
+//! B-spline control points, the phase durations and mu; the constraints are sec. 2.2's
+//! ([`evaluate`]); the objective is mu (plus, optionally, the squared impact speed at a
+//! roll's end, fig. 2). Several initial guesses are tried ([`layout::Layout::guess`]);
+//! the feasible plan with the lowest objective wins.
+
+pub mod evaluate;
+pub mod layout;
+pub mod refine;
+pub mod seed;
+pub mod solve;
+
+use super::motion::PlannedMotion;
+use super::task::Phase;
+use super::{ArmError, ArmSystem, Solver};
+use evaluate::{Kind, PlanSample, Problem};
+use serde::Serialize;
+use std::time::Instant;
+
+/// Largest scaled constraint value a plan may keep and still count as feasible (a
+/// ten-thousandth of each constraint's scale: of g for forces, of the limit for torques
+/// and speeds, of a tenth of the tolerance for the goal). Friction rows are not left
+/// violated: mu is raised to what the samples need ([`repair_mu`]).
+pub const FEASIBILITY_TOL: f64 = 1e-4;
+
+/// SQP stops a hair outside the friction cone; mu is a free variable, so raise it to
+/// what the samples need: the friction rows then hold exactly.
+fn repair_mu(problem: &Problem, x: &mut [f64]) {
+    let e = problem.evaluate(x, false);
+    if let Some(mu) = x.last_mut() {
+        *mu = mu.max(e.mu_needed);
+    }
+}
+
+/// A phase of the plan and its timing.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PhaseSpan {
+    /// Which phase.
+    pub phase: Phase,
+    /// Start, s.
+    pub start_s: f64,
+    /// Duration, s.
+    pub duration_s: f64,
+}
+
+/// A plan: the trajectory, its phases, the mu it needs, and what it cost to find.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Plan {
+    /// B-spline control points, rad.
+    pub points_rad: Vec<f64>,
+    /// Segment duration, s.
+    pub segment_s: f64,
+    /// The phases in order (a flight starts at the release).
+    pub phases: Vec<PhaseSpan>,
+    /// The friction coefficient the plan needs: the design variable at the optimum, or
+    /// the peak friction ratio the verifier finds along the whole trajectory if that is
+    /// higher (the program samples the phases; the verifier steps every 0.1 ms).
+    pub mu: f64,
+    /// The design variable mu at the optimum (what the sampled program needs).
+    pub mu_sampled: f64,
+    /// Objective value.
+    pub objective: f64,
+    /// Normal speed of the roll-end impact, m/s (0 without one).
+    pub impact_speed_mps: f64,
+    /// Solver iterations, summed over the starts.
+    pub iterations: usize,
+    /// Program evaluations, summed over the starts.
+    pub evaluations: usize,
+    /// Wall time of the whole planning, s (noisy on a loaded machine).
+    pub wall_time_s: f64,
+    /// Which start won (0-based) and the solver's status for it.
+    pub start: usize,
+    /// The solver's status word for the winning start.
+    pub status: String,
+    /// The plan's own samples (friction ratio and torque over time).
+    pub samples: Vec<PlanSample>,
+}
+
+impl Plan {
+    /// The planned joint motion (spline, then the release brake, then rest).
+    pub fn motion(&self, brake_accel_radps2: f64) -> PlannedMotion {
+        PlannedMotion {
+            points_rad: self.points_rad.clone(),
+            segment_s: self.segment_s,
+            brake_accel_radps2,
+        }
+    }
+
+    /// Times of the control points' Greville abscissae, s: where each point "sits" on
+    /// the time axis of a plot of the trajectory with its knots.
+    pub fn knot_times_s(&self) -> Vec<f64> {
+        let n = self.points_rad.len();
+        (0..n)
+            .map(|i| {
+                ((i as f64 - 1.0) * self.segment_s).clamp(0.0, (n - 3) as f64 * self.segment_s)
+            })
+            .collect()
+    }
+}
+
+/// The largest constraint value and what it constrains.
+fn worst(e: &evaluate::Eval) -> (f64, Option<Kind>) {
+    e.constraints
+        .iter()
+        .zip(&e.kinds)
+        .fold((f64::NEG_INFINITY, None), |(w, k), (&c, &kind)| {
+            if c > w {
+                (c, Some(kind))
+            } else {
+                (w, k)
+            }
+        })
+}
+
+/// One start: solve, then refine the samples and solve again (at most
+/// [`refine::ROUNDS`] times). Returns the problem with its extra samples and the result.
+fn solve_start<'a>(sys: &'a ArmSystem, x0: Vec<f64>) -> (Problem<'a>, solve::Solved) {
+    let mut problem = Problem::new(sys);
+    let bounds = problem.layout.bounds();
+    let (mut x, mut it, mut ev) = (x0, 0, 0);
+    let mut status = String::new();
+    for round in 0..=refine::ROUNDS {
+        let s = match sys.planner.solver {
+            Solver::Slsqp => solve::slsqp(&problem, &x, &bounds, sys.planner.max_evaluations),
+            Solver::Alm => solve::alm(&problem, &x, &bounds, sys.planner.max_evaluations),
+        };
+        (x, status) = (s.x, s.status);
+        it += s.iterations;
+        ev += s.evaluations;
+        repair_mu(&problem, &mut x);
+        if round == refine::ROUNDS || refine::add_peaks(&mut problem, &x) == 0 {
+            break;
+        }
+    }
+    let solved = solve::Solved {
+        x,
+        iterations: it,
+        evaluations: ev,
+        status,
+    };
+    (problem, solved)
+}
+
+/// Plan the system's task. `Err(NoPlan)` names the constraint that no start satisfied.
+pub fn plan(sys: &ArmSystem) -> Result<Plan, ArmError> {
+    let clock = Instant::now();
+    let seeding = Problem::new(sys);
+    // shot seeds first, then the plain guesses: SQP's local optima differ by start
+    let mut starts = seed::seeds(&seeding, sys.planner.starts);
+    let shot = starts.len();
+    for k in 0..sys.planner.starts.saturating_sub(shot).max(2) {
+        starts.push(seeding.layout.guess(sys.task.kind, k));
+    }
+    let (mut iterations, mut evaluations) = (0, 0);
+    let mut best: Option<(usize, Problem, solve::Solved, f64)> = None;
+    let mut least_bad: (f64, Option<Kind>, String) = (f64::INFINITY, None, String::new());
+    for (k, x0) in starts.into_iter().enumerate() {
+        let (problem, s) = solve_start(sys, x0);
+        iterations += s.iterations;
+        evaluations += s.evaluations;
+        let e = problem.evaluate(&s.x, false);
+        let (w, kind) = worst(&e);
+        if w > FEASIBILITY_TOL {
+            if w < least_bad.0 {
+                least_bad = (w, kind, s.status.clone());
+            }
+            continue;
+        }
+        if best.as_ref().is_none_or(|b| e.objective < b.3) {
+            best = Some((k, problem, s, e.objective));
+        }
+    }
+    let Some((start, problem, s, _)) = best else {
+        return Err(ArmError::NoPlan(format!(
+            "no start met every constraint; the closest violated {:?} by {:.3e} (scaled; solver status {})",
+            least_bad.1, least_bad.0, least_bad.2
+        )));
+    };
+    let e = problem.evaluate(&s.x, true);
+    let d = problem.layout.decode(&s.x);
+    let dense = super::simulate::execute_with(
+        sys,
+        &problem.motion(&d),
+        f64::INFINITY,
+        super::simulate::SimOptions {
+            record: false,
+            ..Default::default()
+        },
+    );
+    let mut t0 = 0.0;
+    let phases = problem
+        .layout
+        .phases
+        .iter()
+        .zip(&d.times_s)
+        .map(|(&phase, &dur)| {
+            let span = PhaseSpan {
+                phase,
+                start_s: t0,
+                duration_s: dur,
+            };
+            if phase != Phase::Flight {
+                t0 += dur;
+            }
+            span
+        })
+        .collect();
+    Ok(Plan {
+        points_rad: d.points_rad,
+        segment_s: d.segment_s,
+        phases,
+        mu: d.mu.max(dense.peak_friction_ratio * (1.0 + 1e-9)),
+        mu_sampled: d.mu,
+        objective: e.objective,
+        impact_speed_mps: e.impact_speed_mps,
+        iterations,
+        evaluations,
+        wall_time_s: clock.elapsed().as_secs_f64(),
+        start,
+        status: s.status,
+        samples: e.trace,
+    })
+}

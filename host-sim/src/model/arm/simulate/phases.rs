@@ -1,0 +1,259 @@
+//! The runner's step for each contact state, and the records it keeps.
+
+use super::step::{self, GraspEvent, RollEvent};
+use super::{Executed, Frame, FrictionSample, GoalError, Runner, State, FRAME_S, FRICTION_S};
+use crate::model::arm::contact::{BodyState, Pivot, Placement};
+use crate::model::arm::geometry::wrap_pi;
+use crate::model::arm::task::Phase;
+
+/// How far below the table top the arm may carry the object before the table takes it
+/// back, m (a tracked arm sags by microns at the start).
+const TABLE_TOLERANCE_M: f64 = 1e-3;
+
+/// Events after which a run is called chattering (a roll starting and falling back
+/// without end).
+const MAX_EVENTS: usize = 1000;
+
+impl Runner<'_> {
+    pub(super) fn grasp(&mut self, p: Placement, t1: f64) {
+        let (rig, arm) = (&self.sys.rig, self.arm);
+        match step::grasp_step(rig, &p, arm, self.mu, self.t, t1) {
+            None => {
+                self.t = t1;
+                self.check_table(&p);
+            }
+            Some((te, GraspEvent::Slips)) => {
+                self.t = te;
+                self.event(te, "slip");
+                self.fail(
+                    Executed::Slipped,
+                    format!("the grasp slipped at t = {te:.4} s"),
+                );
+            }
+            Some((te, GraspEvent::Separates)) => {
+                self.t = te;
+                let s = rig.grasped_state(&p, &arm.joint(te));
+                self.leave(te, s);
+            }
+            Some((te, GraspEvent::Tips(dir))) => {
+                self.t = te;
+                self.event(
+                    te,
+                    if dir > 0.0 {
+                        "roll_start_ccw"
+                    } else {
+                        "roll_start_cw"
+                    },
+                );
+                self.state = State::Roll {
+                    pivot: rig.pivot(&p, dir),
+                    from: p,
+                    psi: (0.0, 0.0),
+                };
+            }
+        }
+    }
+
+    pub(super) fn roll(&mut self, pv: Pivot, from: Placement, psi: (f64, f64), t1: f64) {
+        let (rig, arm) = (&self.sys.rig, self.arm);
+        let (te, s, ev) = step::roll_step(rig, &pv, arm, self.mu, self.t, t1, psi);
+        self.t = te;
+        self.state = State::Roll {
+            pivot: pv,
+            from,
+            psi: s,
+        };
+        match ev {
+            None => {}
+            Some(RollEvent::Lands) => {
+                self.event(te, "roll_end");
+                self.out.impact_speed_mps = Some(rig.impact_speed_mps(&pv, s.1));
+                self.state = State::Grasp(rig.landed(&pv));
+            }
+            Some(RollEvent::FallsBack) => {
+                self.event(te, "roll_back");
+                self.state = State::Grasp(from);
+            }
+            Some(RollEvent::Slips) => {
+                self.event(te, "slip");
+                self.fail(
+                    Executed::Slipped,
+                    format!("the roll slipped at t = {te:.4} s"),
+                );
+            }
+            Some(RollEvent::Separates) => {
+                let st = rig.rolling_state(&pv, s.0, s.1, &arm.joint(te));
+                self.leave(te, st);
+            }
+        }
+        if self.out.events.len() > MAX_EVENTS {
+            self.fail(
+                Executed::Missed,
+                "the roll chattered (too many events)".into(),
+            );
+        }
+    }
+
+    /// The object leaves the surface: a throw's release at the brake, else a failure.
+    fn leave(&mut self, te: f64, s: BodyState) {
+        if self.sys.task.kind.throws() && te >= self.arm.release_s() - 1e-3 {
+            self.event(te, "release");
+            self.out.release = Some(s);
+            self.state = State::Flight { t0: te, start: s };
+        } else {
+            self.event(te, "separation");
+            self.fail(
+                Executed::LostContact,
+                format!("the object left the surface at t = {te:.4} s"),
+            );
+        }
+    }
+
+    pub(super) fn flight(&mut self, t0: f64, start: BodyState, t1: f64) {
+        let g = self.sys.rig.gravity_mps2;
+        if let Some(goal) = self.sys.task.goal {
+            let (y0, vy) = (start.com.y, start.velocity.y);
+            let disc = vy * vy + 2.0 * g * (y0 - goal.y_m);
+            if disc >= 0.0 {
+                let tau = (vy + disc.sqrt()) / g; // the later root: going down
+                if tau > self.t - t0 && tau <= t1 - t0 {
+                    let s = start.flown(tau, g);
+                    self.t = t0 + tau;
+                    self.event(self.t, "landing");
+                    let err = GoalError {
+                        position_m: s
+                            .com
+                            .minus(crate::model::arm::geometry::V2::new(goal.x_m, goal.y_m))
+                            .norm(),
+                        angle_rad: wrap_pi(s.angle_rad - goal.angle_rad),
+                    };
+                    self.out.goal_error = Some(err);
+                    if err.position_m <= goal.tolerance_m
+                        && err.angle_rad.abs() <= goal.angle_tolerance_rad
+                    {
+                        self.verdict =
+                            Some((Executed::Ok, "landed within tolerance of the goal".into()));
+                    } else {
+                        self.fail(
+                            Executed::Missed,
+                            format!(
+                                "landed {:.4} m and {:.4} rad from the goal",
+                                err.position_m, err.angle_rad
+                            ),
+                        );
+                    }
+                    return;
+                }
+            }
+        }
+        let s1 = start.flown(t1 - t0, g);
+        if step::clearance_m(&self.sys.rig, &s1, &self.arm.joint(t1)) < -1e-6 {
+            self.t = t1;
+            self.event(t1, "arm_strike");
+            self.fail(
+                Executed::Missed,
+                format!("the flying object struck the arm at t = {t1:.4} s"),
+            );
+            return;
+        }
+        self.t = t1;
+    }
+
+    /// A snatch must lift the object off the table, not push it through.
+    fn check_table(&mut self, p: &Placement) {
+        if self.sys.task.kind != crate::model::arm::task::TaskKind::Snatch {
+            return;
+        }
+        let s = self.sys.rig.grasped_state(p, &self.arm.joint(self.t));
+        let low = self
+            .sys
+            .rig
+            .body
+            .vertices
+            .iter()
+            .map(|&v| s.point(v).y)
+            .fold(f64::INFINITY, f64::min);
+        if low < self.table_y - TABLE_TOLERANCE_M {
+            self.event(self.t, "table");
+            self.fail(
+                Executed::LostContact,
+                "the arm moved down into the table: the object stays on it".into(),
+            );
+        }
+    }
+
+    /// The object's world state now.
+    pub(super) fn body(&self) -> BodyState {
+        let j = self.arm.joint(self.t);
+        let rig = &self.sys.rig;
+        match self.state {
+            State::Grasp(p) => rig.grasped_state(&p, &j),
+            State::Roll { pivot, psi, .. } => rig.rolling_state(&pivot, psi.0, psi.1, &j),
+            State::Flight { t0, start } => start.flown(self.t - t0, rig.gravity_mps2),
+        }
+    }
+
+    fn phase(&self) -> Phase {
+        match self.state {
+            State::Grasp(_) => Phase::Grasp,
+            State::Roll { .. } => Phase::Roll,
+            State::Flight { .. } => Phase::Flight,
+        }
+    }
+
+    /// Friction needed now (None in flight).
+    fn ratio(&self) -> Option<f64> {
+        let j = self.arm.joint(self.t);
+        let rig = &self.sys.rig;
+        match self.state {
+            State::Grasp(p) => Some(rig.grasp(&p, &j).force.friction_ratio()),
+            State::Roll { pivot, psi, .. } => {
+                Some(rig.roll(&pivot, psi.0, psi.1, &j).force.friction_ratio())
+            }
+            State::Flight { .. } => None,
+        }
+    }
+
+    pub(super) fn record(&mut self) {
+        let ratio = self.ratio();
+        let mut new_peak = false;
+        if let Some(r) = ratio.filter(|r| r.is_finite()) {
+            new_peak = r > self.out.peak_friction_ratio;
+            self.out.peak_friction_ratio = self.out.peak_friction_ratio.max(r);
+        }
+        if !self.opt.record {
+            return;
+        }
+        // every FRICTION_S, and every new peak so that a plot shows the true maximum
+        if self.t >= self.next_friction || new_peak {
+            if let Some(r) = ratio {
+                let phase = self.phase();
+                self.out.friction.push(FrictionSample {
+                    t_s: self.t,
+                    ratio: r,
+                    phase,
+                });
+            }
+            if self.t >= self.next_friction {
+                self.next_friction += FRICTION_S;
+            }
+        }
+        if self.t >= self.next_frame {
+            let b = self.body();
+            self.out.frames.push(Frame {
+                t_s: self.t,
+                arm_angle_rad: self.arm.joint(self.t).angle_rad,
+                object: self
+                    .sys
+                    .rig
+                    .body
+                    .vertices
+                    .iter()
+                    .map(|&v| b.point(v))
+                    .collect(),
+                phase: self.phase(),
+            });
+            self.next_frame += FRAME_S;
+        }
+    }
+}

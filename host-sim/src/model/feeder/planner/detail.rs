@@ -1,0 +1,291 @@
+//! Turning a sequence's parameters into fence schedules, each checked (and, for jogs and
+//! convergent turns, tuned) by simulating the mechanics from the state the previous step
+//! left: what the execution will do, noise aside.
+
+use super::super::geometry::Pose;
+use super::super::primitives::{slide_speed_mps, turn_drift_m, turn_schedule, Primitive, SETTLE_S};
+use super::super::quasistatic::{Mode, Motion};
+use super::super::sim::{flush_edge, run, run_until, Schedule};
+use super::Feeder;
+
+/// The part at rest, flush on the fence at angle 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct State {
+    /// Time, s.
+    pub t_s: f64,
+    /// Pose.
+    pub pose: Pose,
+    /// Hull edge on the fence.
+    pub edge: usize,
+    /// Contact radius, m (the COM's x, the fence being at 0).
+    pub r_m: f64,
+}
+
+/// Radius tolerance of a planned jog, m (well inside the 1 mm feeding tolerance).
+pub const JOG_TOL_M: f64 = 2e-5;
+
+/// A planned piece: its primitive, schedule and the state it leaves.
+pub type Piece = (State, Primitive, Schedule);
+
+/// Simulates `sched` from `st` to its end; the resulting rest state, or why not.
+pub fn settle_on(f: &Feeder, st: &State, sched: &Schedule) -> Result<State, String> {
+    let out = run(
+        &f.part,
+        &f.setup,
+        sched,
+        st.pose,
+        st.t_s,
+        sched.end_s(),
+        |_, _, _| {},
+    );
+    if let Some(fail) = out.failure {
+        return Err(format!("{fail:?}"));
+    }
+    let fence = sched.at(out.t_s);
+    let edge = flush_edge(&f.part, &out.pose, &fence, f.setup.fence_length_m)
+        .ok_or("part not flush on the fence")?;
+    Ok(State {
+        t_s: out.t_s,
+        pose: out.pose,
+        edge,
+        r_m: out.pose.com_m.x,
+    })
+}
+
+/// The arriving part drifts onto the fence held at 0 and settles: simulated until it is
+/// at rest flush on an edge (at most `max_s`), stopping at the exact step the execution
+/// will reach too ([`run_until`]).
+pub fn arrive(f: &Feeder, arrival: Pose, max_s: f64) -> Result<Piece, String> {
+    let mut sched = Schedule::starting(0.0, 0.0);
+    let resting = |_: &Pose, m: &Motion| {
+        matches!(m.mode, Mode::LineStick(..))
+            && m.com_mps.norm() < 1e-9
+            && m.omega_radps.abs() < 1e-9
+    };
+    let out = run_until(
+        &f.part,
+        &f.setup,
+        &sched,
+        (arrival, 0.0, max_s),
+        |_, _, _| {},
+        resting,
+    );
+    if let Some(fail) = out.failure {
+        return Err(format!("arrival: {fail:?}"));
+    }
+    if !resting(&out.pose, &out.motion) {
+        return Err(format!(
+            "arrival: the part did not come to rest on the fence within {max_s} s"
+        ));
+    }
+    let (t, pose) = (out.t_s, out.pose);
+    let fence = sched.at(t);
+    let edge =
+        flush_edge(&f.part, &pose, &fence, f.setup.fence_length_m).ok_or("arrival: not flush")?;
+    sched.hold(t);
+    let st = State {
+        t_s: t,
+        pose,
+        edge,
+        r_m: pose.com_m.x,
+    };
+    let prim = Primitive::Catch {
+        edge,
+        contact_radius_m: st.r_m,
+        duration_s: t,
+    };
+    Ok((st, prim, sched))
+}
+
+/// Schedule of a jog from `st` with tilt `tilt` (> 0 inward) held `hold_s`.
+fn jog_schedule(f: &Feeder, st: &State, tilt: f64, hold_s: f64) -> Schedule {
+    let e = &f.part.edges[st.edge];
+    let vb = f.setup.medium.belt_speed_mps;
+    // A fence turning down keeps the part in contact while omega (r + b) < v_b cos tilt.
+    let reach = st.r_m + e.b_m() + f.part.radius_m;
+    let down = f.drive.push_rate_radps.min(0.5 * vb * tilt.cos() / reach);
+    let mut s = Schedule::starting(st.t_s, 0.0);
+    if tilt > 0.0 {
+        s.move_to(tilt, f.drive.push_rate_radps);
+        s.hold(hold_s);
+        s.move_to(0.0, down);
+    } else {
+        s.move_to(tilt, down);
+        s.hold(hold_s);
+        s.move_to(0.0, f.drive.push_rate_radps);
+    }
+    s.hold(SETTLE_S);
+    s
+}
+
+/// A simulated jog outcome: the rest state and the schedule.
+type Tried = Result<(State, Schedule), String>;
+
+/// Plans the jog from `st` to radius `target_m` on the same edge: the hold time by a
+/// secant iteration on simulated outcomes (then the tilt, for changes smaller than the
+/// tilt alone makes).
+pub fn jog(f: &Feeder, st: &State, target_m: f64) -> Result<Piece, String> {
+    let dr = target_m - st.r_m;
+    let tilt = if dr < 0.0 {
+        f.drive.jog_tilt_rad
+    } else {
+        -f.drive.jog_tilt_rad
+    };
+    let outcome = |tilt: f64, hold: f64| -> Tried {
+        let s = jog_schedule(f, st, tilt, hold);
+        let end = settle_on(f, st, &s)?;
+        if end.edge != st.edge {
+            return Err(format!(
+                "jog tipped the part from edge {} to {}",
+                st.edge, end.edge
+            ));
+        }
+        Ok((end, s))
+    };
+    let full = outcome(tilt, 0.0);
+    let short = full
+        .as_ref()
+        .is_ok_and(|b| (b.0.r_m - target_m) * dr.signum() < 0.0);
+    let (tilt_used, hold, best) = match full {
+        Ok(b) if short => {
+            let speed =
+                slide_speed_mps(f.setup.medium.belt_speed_mps, f.setup.medium.fence_mu, tilt);
+            let (hold, best) = secant_hold(&outcome, b, tilt, target_m, speed)?;
+            (tilt, hold, best)
+        }
+        _ => {
+            let (t, best) = bisect_tilt(&outcome, tilt, target_m, dr)
+                .ok_or_else(|| format!("jog on edge {} found no workable tilt", st.edge))?;
+            (t, 0.0, best)
+        }
+    };
+    let (end, sched) = best;
+    if (end.r_m - target_m).abs() > 25.0 * JOG_TOL_M {
+        return Err(format!(
+            "jog on edge {} missed its radius by {:.2e} m",
+            st.edge,
+            end.r_m - target_m
+        ));
+    }
+    let prim = Primitive::Jog {
+        edge: st.edge,
+        tilt_rad: tilt_used,
+        hold_s: hold,
+        from_radius_m: st.r_m,
+        to_radius_m: end.r_m,
+        duration_s: end.t_s - st.t_s,
+    };
+    Ok((end, prim, sched))
+}
+
+/// The tilt alone falls short: slide longer, secant on the hold time from the first
+/// guess |remaining| / slide speed.
+fn secant_hold(
+    outcome: &impl Fn(f64, f64) -> Tried,
+    at_zero: (State, Schedule),
+    tilt: f64,
+    target_m: f64,
+    speed: f64,
+) -> Result<(f64, (State, Schedule)), String> {
+    let mut prev = (0.0, at_zero.0.r_m - target_m);
+    let mut hold = (target_m - at_zero.0.r_m).abs() / speed;
+    let mut best = (0.0, at_zero);
+    for _ in 0..8 {
+        let b = outcome(tilt, hold)?;
+        let err = b.0.r_m - target_m;
+        best = (hold, b);
+        if err.abs() < JOG_TOL_M {
+            break;
+        }
+        let slope = (err - prev.1) / (hold - prev.0);
+        prev = (hold, err);
+        hold = (hold - err / slope).max(0.0);
+    }
+    Ok(best)
+}
+
+/// The tilt alone overshoots (or slides off the fence): bisect the tilt with no hold.
+fn bisect_tilt(
+    outcome: &impl Fn(f64, f64) -> Tried,
+    tilt: f64,
+    target_m: f64,
+    dr: f64,
+) -> Option<(f64, (State, Schedule))> {
+    let (mut lo, mut hi) = (0.0, tilt.abs());
+    let mut best = None;
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        match outcome(mid * tilt.signum(), 0.0) {
+            Ok(b) => {
+                let err = b.0.r_m - target_m;
+                if err * dr.signum() > 0.0 {
+                    hi = mid
+                } else {
+                    lo = mid
+                }
+                best = Some((mid * tilt.signum(), b));
+                if err.abs() < JOG_TOL_M {
+                    break;
+                }
+            }
+            Err(_) => hi = mid,
+        }
+    }
+    best
+}
+
+/// A turn (or, with `via`, a convergent turn) from `st` onto `to_edge` with catch angle
+/// `theta_minus`, whose catch lands on `catch_edge` (= `to_edge` for a plain turn).
+pub fn turn(
+    f: &Feeder,
+    st: &State,
+    catch_edge: usize,
+    to_edge: usize,
+    theta_minus: f64,
+    via: bool,
+) -> Result<Piece, String> {
+    let p = &f.part;
+    let vb = f.setup.medium.belt_speed_mps;
+    let psi = p.rotation_between(st.edge, catch_edge);
+    let tp = theta_minus + psi;
+    let d = turn_drift_m(
+        &p.edges[st.edge],
+        &p.edges[catch_edge],
+        st.r_m,
+        psi,
+        theta_minus,
+    );
+    let (sched, _) = turn_schedule(st.t_s, &f.drive, vb, tp, theta_minus, d)
+        .ok_or("no time to drop the fence and rise again")?;
+    let end = settle_on(f, st, &sched)?;
+    if end.edge != to_edge {
+        return Err(format!(
+            "turn from edge {} ended on edge {} instead of {to_edge}",
+            st.edge, end.edge
+        ));
+    }
+    let duration_s = end.t_s - st.t_s;
+    let prim = if via {
+        Primitive::ConvergentTurn {
+            from_edge: st.edge,
+            via_edge: catch_edge,
+            to_edge,
+            theta_plus_rad: tp,
+            theta_minus_rad: theta_minus,
+            from_radius_m: st.r_m,
+            to_radius_m: end.r_m,
+            duration_s,
+        }
+    } else {
+        Primitive::Turn {
+            from_edge: st.edge,
+            to_edge,
+            theta_plus_rad: tp,
+            theta_minus_rad: theta_minus,
+            from_radius_m: st.r_m,
+            to_radius_m: end.r_m,
+            duration_s,
+        }
+    };
+    Ok((end, prim, sched))
+}

@@ -1,0 +1,259 @@
+//! The 1JOC primitives of sec. 3.1 / fig. 7 as fence schedules, and the closed forms
+//! behind them.
+//!
+//! The extracted paper lost fig. 7; what follows is our realization, consistent with the
+//! text of sec. 3.1-3.3 and derived with the mechanics of [`super::quasistatic`].
+//!
+//! - **Stable push**: the fence turns at the push rate omega_p with an edge flush; the
+//!   part moves rigidly with it (contact radius unchanged) while the radius is above the
+//!   minimum of [`super::stability`].
+//! - **Turn** (from stable edge e to stable edge e', counter-clockwise rotation Psi of the
+//!   part, 0 < Psi < 180 deg): stable push 0 -> theta+; the fence drops away at its top
+//!   rate; the part drifts in -y; the fence, rising again at omega_p, meets it exactly
+//!   when edge e' (now at angle theta+ - Psi) lies on the fence line, so
+//!   **theta- = theta+ - Psi** and e' lands flush ("caught at theta-"); stable push
+//!   theta- -> 0. A single turn can rotate the part by less than 180 deg only, since
+//!   theta+ < 90 deg and theta- > -90 deg: that is why the paper needs another primitive
+//!   for 180 deg. Closed forms ([`turn_drift_m`], [`turn_landing_radius_m`]): with the
+//!   COM at fence coordinates (r, h) on e and height h' above e',
+//!
+//!   ```text
+//!   D  = (r sin Psi + h cos Psi - h') / cos theta-           (drift distance, m)
+//!   r' = r cos Psi - h sin Psi - D sin theta-                (contact radius on e')
+//!   ```
+//!
+//!   (the COM after the push is `R(theta+)(r, h)`; after drifting D it must sit h' above
+//!   the line at theta-, and r' is its coordinate along that line).
+//! - **Convergent turn** (parallel stable edges e, e', Psi = 180 deg): a turn whose catch
+//!   lands flush on an *unstable* hull edge u between them that tips counter-clockwise;
+//!   as the fence pushes on toward 0 the part tips over u's start vertex and converges
+//!   onto e'. Its outcome is found by simulation.
+//! - **Jog** (change r on one edge without changing the part's angle): the fence tilts to
+//!   +-theta_j beyond the friction angle atan mu and holds; the part slides along it,
+//!   toward the pivot at +theta_j, away at -theta_j, at
+//!   `s = v_b (sin theta_j - mu cos theta_j)` ([`slide_speed_mps`], derived in the
+//!   mechanics tests), then the fence returns to 0. The paper's jog interleaves small
+//!   stable pushes with drift; with the vertex landing that this implies, the radius
+//!   gain is second order in the push angle while the slip of the landing vertex during
+//!   re-alignment is first order, so we slide instead. Sliding keeps the edge flush only
+//!   if the resultant, which meets the fence mu h from the COM's foot on the down-slope
+//!   side, stays on the edge ([`can_jog`]).
+
+use super::part::{HullEdge, Part};
+use super::sim::Schedule;
+use super::stability::PUSH_MARGIN;
+use serde::Serialize;
+
+/// Fence angle run-up before a catch, rad (3 degrees): the fence is already rising at
+/// the push rate when the part's new edge meets it.
+pub const CATCH_RUN_UP_RAD: f64 = 0.05;
+
+/// Hold at angle 0 that ends every turn and jog, s: the part is at rest on the fence
+/// before the next primitive starts (with theta- = 0 the catch is the turn's last
+/// instant, and without the hold the next push would start as the part lands).
+pub const SETTLE_S: f64 = 0.05;
+
+/// Fence motion limits and the belt's speed: what a schedule may command.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Drive {
+    /// omega_p, fence rate during stable pushes and catches, rad/s (> 0).
+    pub push_rate_radps: f64,
+    /// Fence rate while dropping away from a drifting part, rad/s (>= push rate).
+    pub max_rate_radps: f64,
+    /// Largest |fence angle|, rad (< pi/2).
+    pub max_angle_rad: f64,
+    /// Fence tilt during a jog's slide, rad (> atan mu).
+    pub jog_tilt_rad: f64,
+}
+
+/// One step of a feeding plan, with its parameters (serialized into the summary's
+/// `plan`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "primitive", rename_all = "snake_case")]
+pub enum Primitive {
+    /// The fence waits at 0 while the arriving part drifts onto it and settles.
+    Catch {
+        /// Hull edge the part settles on.
+        edge: usize,
+        /// Contact radius after settling, m.
+        contact_radius_m: f64,
+        /// Duration, s.
+        duration_s: f64,
+    },
+    /// Slide along the tilted fence: changes the contact radius on `edge`.
+    Jog {
+        /// Hull edge in contact.
+        edge: usize,
+        /// Fence tilt during the slide, rad (> 0 moves the part toward the pivot).
+        tilt_rad: f64,
+        /// Time the tilt is held, s.
+        hold_s: f64,
+        /// Contact radius before, m.
+        from_radius_m: f64,
+        /// Contact radius after (planned), m.
+        to_radius_m: f64,
+        /// Duration, s.
+        duration_s: f64,
+    },
+    /// Stable push to theta+, drift, catch at theta-, stable push back to 0.
+    Turn {
+        /// Edge before.
+        from_edge: usize,
+        /// Edge after.
+        to_edge: usize,
+        /// theta+, rad.
+        theta_plus_rad: f64,
+        /// theta-, rad.
+        theta_minus_rad: f64,
+        /// Contact radius before, m.
+        from_radius_m: f64,
+        /// Contact radius after (planned), m.
+        to_radius_m: f64,
+        /// Duration, s.
+        duration_s: f64,
+    },
+    /// A turn caught on unstable edge `via_edge` that tips onto `to_edge` (180 deg).
+    ConvergentTurn {
+        /// Edge before.
+        from_edge: usize,
+        /// The unstable hull edge the catch lands on.
+        via_edge: usize,
+        /// Edge after.
+        to_edge: usize,
+        /// theta+, rad.
+        theta_plus_rad: f64,
+        /// theta-, rad (catch angle on `via_edge`).
+        theta_minus_rad: f64,
+        /// Contact radius before, m.
+        from_radius_m: f64,
+        /// Contact radius after (planned), m.
+        to_radius_m: f64,
+        /// Duration, s.
+        duration_s: f64,
+    },
+}
+
+impl Primitive {
+    /// Duration, s.
+    pub fn duration_s(&self) -> f64 {
+        match self {
+            Primitive::Catch { duration_s, .. }
+            | Primitive::Jog { duration_s, .. }
+            | Primitive::Turn { duration_s, .. }
+            | Primitive::ConvergentTurn { duration_s, .. } => *duration_s,
+        }
+    }
+}
+
+/// Drift distance D, m, of a turn (see the module doc); `psi` = Psi, rad.
+pub fn turn_drift_m(from: &HullEdge, to: &HullEdge, r_m: f64, psi: f64, theta_minus: f64) -> f64 {
+    (r_m * psi.sin() + from.h_m * psi.cos() - to.h_m) / theta_minus.cos()
+}
+
+/// Contact radius r' on the new edge after a turn, m (see the module doc).
+pub fn turn_landing_radius_m(
+    from: &HullEdge,
+    to: &HullEdge,
+    r_m: f64,
+    psi: f64,
+    theta_minus: f64,
+) -> f64 {
+    let d = turn_drift_m(from, to, r_m, psi, theta_minus);
+    r_m * psi.cos() - from.h_m * psi.sin() - d * theta_minus.sin()
+}
+
+/// Fence schedule of a (convergent) turn from `t0` starting at fence angle 0, for drift
+/// distance `drift_m`; `None` when the fence cannot drop away and rise again within the
+/// drift time. Returns the schedule and the catch time.
+pub fn turn_schedule(
+    t0: f64,
+    drive: &Drive,
+    v_b: f64,
+    theta_plus: f64,
+    theta_minus: f64,
+    drift_m: f64,
+) -> Option<(Schedule, f64)> {
+    let mut s = Schedule::starting(t0, 0.0);
+    s.move_to(theta_plus, drive.push_rate_radps);
+    let t_release = s.end_s();
+    let t_catch = t_release + drift_m / v_b;
+    let run_up = CATCH_RUN_UP_RAD
+        .min(theta_minus + drive.max_angle_rad)
+        .max(0.0);
+    let low = theta_minus - run_up;
+    s.move_to(low, drive.max_rate_radps);
+    let rise_start = t_catch - run_up / drive.push_rate_radps;
+    if s.end_s() > rise_start + 1e-12 {
+        return None;
+    }
+    s.hold(rise_start - s.end_s());
+    s.move_to(theta_minus, drive.push_rate_radps);
+    s.move_to(0.0, drive.push_rate_radps);
+    s.hold(SETTLE_S);
+    Some((s, t_catch))
+}
+
+/// Least drift time, s, for the fence to drop from theta+ and rise again to theta-.
+pub fn turn_min_drift_s(drive: &Drive, theta_plus: f64, theta_minus: f64) -> f64 {
+    let run_up = CATCH_RUN_UP_RAD
+        .min(theta_minus + drive.max_angle_rad)
+        .max(0.0);
+    (theta_plus - theta_minus + run_up) / drive.max_rate_radps + run_up / drive.push_rate_radps
+}
+
+/// Duration of a turn, s: push up, drift, push back.
+pub fn turn_duration_s(
+    drive: &Drive,
+    v_b: f64,
+    theta_plus: f64,
+    theta_minus: f64,
+    drift_m: f64,
+) -> f64 {
+    (theta_plus + theta_minus.abs()) / drive.push_rate_radps + drift_m / v_b
+}
+
+/// Slide speed along a fence held at `tilt_rad` (|tilt| > atan mu), m/s.
+pub fn slide_speed_mps(v_b: f64, mu: f64, tilt_rad: f64) -> f64 {
+    v_b * (tilt_rad.abs().sin() - mu * tilt_rad.cos())
+}
+
+/// Whether `edge` can slide without tipping: outward (`outward`, fence tilted down) the
+/// resultant meets the fence mu h beyond the COM's foot, inward mu h before it; it must
+/// stay on the edge with [`PUSH_MARGIN`].
+pub fn can_jog(edge: &HullEdge, mu: f64, outward: bool) -> bool {
+    let room = if outward { edge.b_m() } else { edge.a_m };
+    mu * edge.h_m < (1.0 - PUSH_MARGIN) * room
+}
+
+/// The jog tilts tried, steepest first: the configured tilt, then 60 % and 30 % of the
+/// way from the friction angle atan mu to it. A gentler tilt slides slower but its
+/// return push (from -tilt back to 0, outward jogs) and tilt push (inward) need smaller
+/// contact radii.
+pub fn jog_tilts(drive: &Drive, mu: f64) -> [f64; 3] {
+    let fa = mu.atan();
+    let t = drive.jog_tilt_rad;
+    [t, fa + 0.6 * (t - fa), fa + 0.3 * (t - fa)]
+}
+
+/// Approximate duration of a jog changing the radius by `dr_m`, s: the planner's
+/// estimate (tilt out and back at the push rate, then slide); 0 for no jog.
+pub fn jog_estimate_s(drive: &Drive, v_b: f64, mu: f64, dr_m: f64) -> f64 {
+    let s = slide_speed_mps(v_b, mu, drive.jog_tilt_rad);
+    let overhead = 2.0 * drive.jog_tilt_rad / drive.push_rate_radps;
+    overhead * (dr_m.abs() / 1e-3).min(1.0) + dr_m.abs() / s
+}
+
+/// Counter-clockwise sequence of unstable hull edges strictly between stable edges `from`
+/// and `to` (in the order a counter-clockwise roll meets them), and whether every one
+/// of them tips counter-clockwise (its COM foot lies before its start vertex).
+pub fn edges_between(part: &Part, from: usize, to: usize) -> (Vec<usize>, bool) {
+    let n = part.edges.len();
+    let mut out = Vec::new();
+    let mut i = (from + n - 1) % n;
+    while i != to && out.len() < n {
+        out.push(i);
+        i = (i + n - 1) % n;
+    }
+    let tips = out.iter().all(|&u| part.edges[u].a_m < 0.0);
+    (out, tips)
+}

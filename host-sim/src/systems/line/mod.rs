@@ -1,0 +1,150 @@
+//! The line juggler (Rizzi & Koditschek 1994, sec. 2) and the passive bounce: a ball and a
+//! paddle (or a fixed table) on a vertical line, with the switchable effects of
+//! [`crate::effects`] (sensor, actuator, jitter), drag and Zeno. Its controller is the
+//! core's [`Controller`] (`control.mode = "sil"`), in SIL or on the target (`--hil`).
+//!
+//! | module | what it holds |
+//! | --- | --- |
+//! | [`scene`], [`validate`] | the scene schema (`docs/scenes.md`) and its checks |
+//! | [`assemble`] | the plant from the scene, only the enabled effects |
+//! | [`loops`] | the event-driven and the fixed-rate run loops |
+//! | [`run`] | the run API: options, outcome, streaming every impact |
+//! | [`summary`] | convergence, period, resting contact; text and JSON |
+//! | [`trace`] | one CSV row per impact |
+//! | [`plots`] | apex per impact, return map, phase portrait |
+//! | [`sweep`] | late apexes over one key (bifurcation diagram) |
+//!
+//! It runs every scene that no other system claims (the registry asks it last).
+
+pub mod assemble;
+pub mod loops;
+pub mod plots;
+pub mod run;
+pub mod scene;
+pub mod summary;
+pub mod sweep;
+pub mod trace;
+pub mod validate;
+
+use self::run::{run_streaming, RunOptions};
+use self::scene::{ControlMode, Scene};
+use self::summary::Summary;
+use self::trace::ImpactRow;
+use super::{Outcome, System};
+use crate::controller::{HilReport, StepController};
+use crate::output::{json_text, JsonStyle};
+use crate::scene::{SceneError, SceneFile};
+use crate::verbs::{Failure, RunLength, Setup, SweepRequest};
+use dexter_core::control::{Controller, ControllerParams};
+
+/// The line system.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LineSystem;
+
+/// A line run's result: its summary, and the phase samples the plots draw.
+#[derive(Clone, Debug)]
+pub struct LineOutcome {
+    /// The summary (`--json`).
+    pub summary: Summary,
+    /// (b, b') once per control step (SIL runs with `--plot`).
+    pub phase: Vec<(f64, f64)>,
+    /// Gravity, m/s^2 (for the phase portrait of a run without a controller).
+    pub gravity_mps2: f64,
+}
+
+impl Outcome for LineOutcome {
+    fn text(&self) -> String {
+        self.summary.to_text()
+    }
+    fn json(&self) -> Result<String, String> {
+        json_text(&self.summary, JsonStyle::Pretty)
+    }
+    fn attach_hil(&mut self, report: HilReport) {
+        self.summary.hil = Some(report);
+    }
+}
+
+/// The error of closing a loop through an external controller on a scene without one.
+fn needs_sil(scene: &Scene) -> SceneError {
+    let mode = match scene.control.mode {
+        ControlMode::None => "none",
+        ControlMode::IdealMirror => "ideal_mirror",
+        ControlMode::Sil => "sil",
+    };
+    SceneError::new(
+        "control.mode",
+        format!("is \"{mode}\": an external controller (--hil) needs \"sil\""),
+    )
+}
+
+impl System for LineSystem {
+    const NAME: &'static str = "line";
+    /// No table of its own: `[physics]`, `[control]`, ... (`docs/scenes.md`).
+    const TABLE: &'static str = "";
+    const IMPACTS_KEY: &'static str = "stop.impacts";
+    type Config = Scene;
+    type Controller = Controller;
+    type Row = ImpactRow;
+    type Outcome = LineOutcome;
+    type Plots = plots::LinePlots;
+
+    /// Every scene: the registry asks the line system last, so it runs the scenes no
+    /// other system claims.
+    fn claims(_: &toml::Table) -> bool {
+        true
+    }
+
+    fn set_length(table: &mut toml::Table, length: &RunLength) -> Result<(), Failure> {
+        let set = |t: &mut toml::Table, k: &str, v| crate::scene::apply_set(t, k, v);
+        if let Some(n) = length.impacts {
+            let n = i64::try_from(n)
+                .map_err(|_| Failure::usage(format!("--impacts {n} is too large")))?;
+            set(table, "stop.impacts", toml::Value::Integer(n))?;
+            let cap_s = (n.max(1) as f64) * 60.0;
+            set(table, "stop.duration_s", toml::Value::Float(cap_s))?;
+        }
+        if let Some(d) = length.duration {
+            set(table, "stop.duration_s", toml::Value::Float(d))?;
+            set(table, "stop.impacts", toml::Value::Integer(i64::MAX))?;
+        }
+        Ok(())
+    }
+
+    fn parse(file: &SceneFile, mut table: toml::Table) -> Result<Scene, SceneError> {
+        scene::name_after(&mut table, &file.stem)?;
+        Scene::from_table(table)
+    }
+
+    fn controller_params(cfg: &Scene) -> Result<Option<ControllerParams>, SceneError> {
+        if cfg.control.mode != ControlMode::Sil {
+            return Err(needs_sil(cfg));
+        }
+        cfg.controller_params().map(Some)
+    }
+
+    fn run(
+        cfg: &Scene,
+        ctrl: Option<&mut dyn StepController<Controller>>,
+        setup: &Setup,
+        rows: &mut dyn FnMut(&ImpactRow),
+    ) -> Result<LineOutcome, Failure> {
+        let options = RunOptions {
+            record_rows: false,
+            record_phase: setup.plot,
+            progress: setup.progress,
+        };
+        let out = run_streaming(cfg, &options, ctrl, rows).map_err(|e| match e {
+            run::RunError::Scene(s) => Failure::scene(s),
+            other => Failure::run(other),
+        })?;
+        Ok(LineOutcome {
+            summary: Summary::new(cfg, &out),
+            phase: out.phase,
+            gravity_mps2: cfg.physics.gravity_mps2,
+        })
+    }
+
+    fn sweep(file: &SceneFile, req: &SweepRequest) -> Result<(), Failure> {
+        crate::verbs::sweep::<Self>(file, req)
+    }
+}

@@ -1,0 +1,288 @@
+//! Run summaries: convergence to the target apex, the detected period, resting contact,
+//! timing; as human-readable text or one JSON object. The apex statistics are kept in
+//! constant memory as the run goes ([`ApexStats`]).
+
+use super::run::RunOutcome;
+use super::scene::{ControlMode, Scene};
+use crate::controller::HilReport;
+use crate::stream::Tail;
+use serde::Serialize;
+
+/// Fewest trailing in-band apexes for a run to count as converged.
+pub const MIN_CONVERGED_TAIL: usize = 5;
+
+/// Apexes one period is checked over ([`detect_period`] needs `5 p` of them).
+const PERIOD_SPAN: usize = 5;
+
+/// The apex sequence of a run in constant memory: the last apex, the count, the length of
+/// the trailing run of apexes within the convergence band, and the last
+/// 5 x `analysis.max_period` apexes. [`converged_after`] and [`detect_period`] on these
+/// give the same answers as on the whole sequence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ApexStats {
+    target: Option<f64>,
+    band_m: f64,
+    in_band_tail: u64,
+    tail: Tail<f64>,
+    max_period: u32,
+    period_tolerance: f64,
+}
+
+impl ApexStats {
+    /// For a run of `scene` (its target, if it has one, and its `[analysis]` table).
+    pub fn for_scene(scene: &Scene) -> Self {
+        let target = (scene.control.mode != ControlMode::None)
+            .then_some(scene.control.target_apex_m)
+            .flatten();
+        let an = &scene.analysis;
+        Self {
+            target,
+            band_m: target.map_or(0.0, |t| an.converge_tolerance * t.abs()),
+            in_band_tail: 0,
+            tail: Tail::new(PERIOD_SPAN * an.max_period as usize),
+            max_period: an.max_period,
+            period_tolerance: an.period_tolerance,
+        }
+    }
+
+    /// The apex after one more impact, m.
+    #[inline]
+    pub fn push(&mut self, apex_m: f64) {
+        match self.target {
+            Some(t) if (apex_m - t).abs() <= self.band_m => self.in_band_tail += 1,
+            _ => self.in_band_tail = 0,
+        }
+        self.tail.push(apex_m);
+    }
+
+    /// Apexes seen.
+    pub fn count(&self) -> u64 {
+        self.tail.seen()
+    }
+
+    /// The last apex, m.
+    pub fn last(&self) -> Option<f64> {
+        self.tail.last().copied()
+    }
+
+    /// As [`converged_after`] on every apex of the run.
+    pub fn converged_after(&self) -> Option<u64> {
+        self.target?;
+        (self.in_band_tail >= MIN_CONVERGED_TAIL as u64)
+            .then(|| self.count() - self.in_band_tail + 1)
+    }
+
+    /// As [`detect_period`] on every apex of the run.
+    pub fn period(&self) -> Option<u32> {
+        let mut tail = self.tail.clone();
+        detect_period(tail.as_slice(), self.max_period, self.period_tolerance)
+    }
+}
+
+/// The summary of one run (the `--json` object).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// Scene name.
+    pub scene: String,
+    /// Impacts simulated.
+    pub impacts: u64,
+    /// Control steps taken (0 without a controller).
+    pub control_steps: u64,
+    /// Simulated time, s.
+    pub sim_time_s: f64,
+    /// Wall-clock time, s.
+    pub wall_time_s: f64,
+    /// Target apex h*, m (null for a passive scene).
+    pub target_apex_m: Option<f64>,
+    /// Apex after the last impact, m (null without impacts).
+    pub final_apex_m: Option<f64>,
+    /// Impacts after which every apex stayed within `analysis.converge_tolerance` of the
+    /// target (null if it never settled there, or did for fewer than 5 impacts).
+    pub converged_after_impacts: Option<u64>,
+    /// Period of the apex sequence at the end, impacts (null if none found or resting).
+    pub period: Option<u32>,
+    /// True if the ball came to resting contact (a Zeno sequence) at any time.
+    pub resting_contact: bool,
+    /// Time the first resting contact began, s (the Zeno limit for a fixed table).
+    pub resting_since_s: Option<f64>,
+    /// Impacts before the first resting contact.
+    pub resting_after_impacts: Option<u64>,
+    /// Grazing contacts (zero relative speed).
+    pub grazing_contacts: u64,
+    /// HIL figures (only with `--hil`).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub hil: Option<HilReport>,
+}
+
+/// Impacts after which all apexes stay within `tol` (relative) of `target`; None if the
+/// in-band tail is shorter than [`MIN_CONVERGED_TAIL`].
+pub fn converged_after(apexes: &[f64], target: f64, tol: f64) -> Option<u64> {
+    let band = tol * target.abs();
+    let tail = apexes
+        .iter()
+        .rev()
+        .take_while(|a| (*a - target).abs() <= band)
+        .count();
+    if tail >= MIN_CONVERGED_TAIL {
+        Some((apexes.len() - tail) as u64 + 1)
+    } else {
+        None
+    }
+}
+
+/// The smallest period p <= `max_period` such that the last `4 p` apexes each equal the one
+/// p before within `tol` (relative); needs `5 p` apexes.
+pub fn detect_period(apexes: &[f64], max_period: u32, tol: f64) -> Option<u32> {
+    let n = apexes.len();
+    (1..=max_period).find(|&p| {
+        let p = p as usize;
+        n >= 5 * p
+            && (n - 4 * p..n).all(|i| {
+                let (a, b) = (apexes[i], apexes[i - p]);
+                (a - b).abs() <= tol * a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
+            })
+    })
+}
+
+impl Summary {
+    /// Summarise `out`, a run of `scene`.
+    pub fn new(scene: &Scene, out: &RunOutcome) -> Self {
+        let target = (scene.control.mode != ControlMode::None)
+            .then_some(scene.control.target_apex_m)
+            .flatten();
+        let first_rest = out.rests.first();
+        Self {
+            scene: scene.name().to_string(),
+            impacts: out.impacts,
+            control_steps: out.control_steps,
+            sim_time_s: out.sim_time_s,
+            wall_time_s: out.wall_time_s,
+            target_apex_m: target,
+            final_apex_m: out.apexes.last(),
+            converged_after_impacts: out.apexes.converged_after(),
+            period: if out.resting_at_end {
+                None
+            } else {
+                out.apexes.period()
+            },
+            resting_contact: out.rest_count > 0,
+            resting_since_s: first_rest.map(|r| r.time_s),
+            resting_after_impacts: first_rest.map(|r| r.after_impacts),
+            grazing_contacts: out.grazing_contacts,
+            hil: out.hil,
+        }
+    }
+
+    /// One JSON object (indented).
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+
+    /// Human-readable summary.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.6} m"));
+        s += &format!("scene            {}\n", self.scene);
+        s += &format!("target apex      {}\n", opt(self.target_apex_m));
+        s += &format!("final apex       {}\n", opt(self.final_apex_m));
+        s += &format!(
+            "converged (1 %)  {}\n",
+            match (self.target_apex_m, self.converged_after_impacts) {
+                (None, _) => "- (no target)".to_string(),
+                (_, Some(n)) => format!("after {n} impacts"),
+                (_, None) => "never".to_string(),
+            }
+        );
+        s += &format!(
+            "period           {}\n",
+            self.period
+                .map_or("none detected".to_string(), |p| p.to_string())
+        );
+        s += &format!(
+            "resting contact  {}\n",
+            match (self.resting_since_s, self.resting_after_impacts) {
+                (Some(t), Some(n)) => format!("yes, from t = {t:.9} s after {n} impacts (Zeno)"),
+                _ => "no".to_string(),
+            }
+        );
+        s += &format!("impacts          {}\n", self.impacts);
+        if self.control_steps > 0 {
+            s += &format!("control steps    {}\n", self.control_steps);
+        }
+        s += &format!("sim time         {:.6} s\n", self.sim_time_s);
+        s += &format!("wall time        {:.6} s\n", self.wall_time_s);
+        if let Some(h) = &self.hil {
+            s += &format!(
+                "HIL              {} mismatches, {} link errors, {} timeouts, {} over budget, steps/s {:.0}, instr min/mean/max {}/{:.1}/{}\n",
+                h.sil_mismatches,
+                h.link_errors,
+                h.link_timeouts,
+                h.over_budget_steps,
+                h.steps_per_wall_second,
+                h.step_instructions_min,
+                h.step_instructions_mean,
+                h.step_instructions_max
+            );
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn convergence_counts_impacts_before_the_final_band() {
+        let a = [0.5, 0.8, 0.95, 1.005, 0.998, 1.0, 1.001, 0.999];
+        assert_eq!(converged_after(&a, 1.0, 0.01), Some(4));
+        assert_eq!(converged_after(&a[..6], 1.0, 0.01), None); // tail of 3 only
+        assert_eq!(converged_after(&[0.5; 20], 1.0, 0.01), None);
+    }
+
+    /// ApexStats over a stream gives what the functions give on the whole sequence.
+    #[test]
+    fn streaming_statistics_equal_the_whole_sequence() {
+        let mut scene = Scene::default();
+        scene.control.mode = ControlMode::IdealMirror;
+        scene.control.target_apex_m = Some(1.0);
+        scene.analysis.max_period = 3;
+        // settling, a period-3 stretch, a period-2 stretch, noise, convergence
+        let mut seq = Vec::new();
+        let mut x = 0.37_f64;
+        for i in 0..400 {
+            x = 3.9 * x * (1.0 - x);
+            seq.push(match i {
+                0..=99 => 1.0 + 0.5 * (-(i as f64) / 20.0).exp(),
+                100..=199 => [0.8, 1.1, 1.3][i % 3],
+                200..=299 => [0.9, 1.2][i % 2],
+                _ => 1.0 + 0.02 * (x - 0.5),
+            });
+        }
+        for n in [0, 3, 14, 15, 99, 150, 160, 250, 399, 400] {
+            let mut stats = ApexStats::for_scene(&scene);
+            for &a in &seq[..n] {
+                stats.push(a);
+            }
+            let whole = &seq[..n];
+            assert_eq!(
+                stats.converged_after(),
+                converged_after(whole, 1.0, 0.01),
+                "{n}"
+            );
+            assert_eq!(stats.period(), detect_period(whole, 3, 1e-3), "{n}");
+            assert_eq!(stats.last(), whole.last().copied(), "{n}");
+        }
+    }
+
+    #[test]
+    fn period_two_is_found_and_period_one_preferred() {
+        let p2: Vec<f64> = (0..20)
+            .map(|i| if i % 2 == 0 { 1.2 } else { 0.7 })
+            .collect();
+        assert_eq!(detect_period(&p2, 8, 1e-6), Some(2));
+        assert_eq!(detect_period(&[1.0; 10], 8, 1e-6), Some(1));
+        let chaos: Vec<f64> = (0..50).map(|i| (i as f64 * 1.7).sin()).collect();
+        assert_eq!(detect_period(&chaos, 8, 1e-6), None);
+    }
+}

@@ -1,0 +1,116 @@
+//! `dexter sweep` on a line scene: the scene run at every value of one key, keeping the
+//! last `--keep` apexes of each run: a bifurcation diagram (e.g. over
+//! `control.kappa1_s2pm2`). CSV: `KEY,apex_height_m`, one row per kept apex.
+
+use super::run::{run_streaming, RunError, RunOptions};
+use super::scene::Scene;
+use super::LineSystem;
+use crate::output::Sig17;
+use crate::plot;
+use crate::stream::{Decimator, Tail};
+use crate::verbs::{Failure, SweepBase, SweepReport, Sweeps};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The late apexes of one run, m.
+pub struct LatePoint(Vec<f64>);
+
+/// Run the scene `table` with `key` = `value` and keep its last `keep` apexes, m.
+fn late_apexes(
+    table: &toml::Table,
+    key: &str,
+    value: f64,
+    keep: usize,
+) -> Result<Vec<f64>, RunError> {
+    let mut t = table.clone();
+    crate::scene::apply_set(&mut t, key, toml::Value::Float(value))?;
+    let scene = Scene::from_table(t)?;
+    let mut tail = Tail::new(keep);
+    run_streaming(&scene, &RunOptions::default(), None, &mut |r| {
+        tail.push(r.apex_height_m)
+    })?;
+    Ok(tail.iter().copied().collect())
+}
+
+/// Run `base` (a scene table, overrides applied) at every value of `range`, keeping the
+/// last `keep` apex heights of each run: (value, apex) points, in order (serially; the CLI
+/// runs the points on every core).
+pub fn sweep(
+    base: &toml::Table,
+    range: &crate::sweep::Range,
+    keep: usize,
+) -> Result<Vec<(f64, f64)>, RunError> {
+    let mut points = Vec::new();
+    for v in range.values() {
+        let late = late_apexes(base, &range.key, v, keep)?;
+        points.extend(late.into_iter().map(|a| (v, a)));
+    }
+    Ok(points)
+}
+
+/// What the bifurcation plot keeps.
+pub struct LineSweepReport {
+    key: String,
+    stem: String,
+    points: Decimator<(f64, f64)>,
+}
+
+impl Sweeps for LineSystem {
+    type Point = LatePoint;
+    type Report = LineSweepReport;
+
+    fn point(base: &SweepBase<Self>, x: f64, _: Option<f64>) -> Result<LatePoint, Failure> {
+        let late = late_apexes(&base.table, &base.grid.x.key, x, base.keep);
+        late.map(LatePoint).map_err(|e| match e {
+            RunError::Scene(s) => Failure::scene(s),
+            other => Failure::run(other),
+        })
+    }
+
+    fn report(base: &SweepBase<Self>) -> LineSweepReport {
+        LineSweepReport {
+            key: base.grid.x.key.clone(),
+            stem: format!("{}-bifurcation", base.config.name()),
+            points: Decimator::default(),
+        }
+    }
+}
+
+impl SweepReport<LineSystem> for LineSweepReport {
+    fn csv_header(&self) -> String {
+        format!("{},apex_height_m", self.key)
+    }
+
+    fn write_csv(
+        &self,
+        x: f64,
+        _: Option<f64>,
+        p: &LatePoint,
+        w: &mut dyn Write,
+    ) -> std::io::Result<()> {
+        for &a in &p.0 {
+            writeln!(w, "{},{}", Sig17(x), Sig17(a))?;
+        }
+        Ok(())
+    }
+
+    fn add(&mut self, x: f64, _: Option<f64>, p: LatePoint) {
+        for a in p.0 {
+            self.points.push((x, a));
+        }
+    }
+
+    fn summary(&self, _: Option<&Path>) -> Result<String, Failure> {
+        Ok(String::new())
+    }
+
+    fn plot(&self, dir: &Path) -> Result<Vec<PathBuf>, Failure> {
+        let label = plot::key_label(&self.key);
+        Ok(plot::bifurcation(
+            self.points.values(),
+            &label,
+            dir,
+            &self.stem,
+        )?)
+    }
+}

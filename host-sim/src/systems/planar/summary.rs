@@ -1,0 +1,261 @@
+//! The planar run's summary: outcome, energy against eta*, tilt amplitude and the
+//! stability class, as text or one JSON object (`docs/planar.md`, "Command line").
+
+use crate::model::planar::analysis::{self, CellClass};
+use crate::model::planar::{
+    Body, ContactLaw, ImpactRecord, PlanarModel, PlanarParams, PlanarRun, RunEnd,
+};
+use dexter_core::tilt::kappa_crit;
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// Summary of one planar run (the `--json` object; snake_case keys with units).
+#[derive(Clone, Debug, Serialize)]
+pub struct RunSummary {
+    /// Scene name (file stem).
+    pub scene: String,
+    /// `rigid` or `point_mass`.
+    pub body: &'static str,
+    /// `frictionless` or `coulomb`.
+    pub contact: &'static str,
+    /// rho, m (0 for a point mass).
+    pub rho_m: f64,
+    /// l, m (0 for a point mass).
+    pub l_m: f64,
+    /// G, m/s^2.
+    pub gravity_mps2: f64,
+    /// kappa.
+    pub kappa: f64,
+    /// kappa_E, s^2/m^2.
+    pub kappa_e_s2pm2: f64,
+    /// e.
+    pub restitution: f64,
+    /// mu.
+    pub friction_mu: f64,
+    /// sigma of the timing noise, s.
+    pub timing_noise_s: f64,
+    /// Noise seed.
+    pub seed: u64,
+    /// eq. 16's kappa_crit at the target energy (null for a point mass or no flight).
+    pub kappa_crit_eq16: f64,
+    /// Impacts asked for.
+    pub impacts_requested: usize,
+    /// Impacts simulated.
+    pub impacts: usize,
+    /// Why the run ended (`completed`, `tipped_over`, `no_separation`, ...).
+    pub end: RunEnd,
+    /// All impacts done without tipping over or losing the body.
+    pub stayed_up: bool,
+    /// Time of the last recorded impact, s.
+    pub end_time_s: f64,
+    /// eta*, J/kg.
+    pub target_energy_jpkg: f64,
+    /// eta at the first impact, J/kg.
+    pub first_energy_jpkg: f64,
+    /// Impacts in the late window (the last quarter).
+    pub late_window_impacts: usize,
+    /// Mean eta over the late window, J/kg.
+    pub late_mean_energy_jpkg: f64,
+    /// (late mean - eta*)/eta*.
+    pub late_mean_energy_rel_error: f64,
+    /// max |theta| at impacts over the run, rad (point mass: the incoming velocity's angle).
+    pub max_abs_theta_rad: f64,
+    /// max |theta| at impacts over the late window, rad.
+    pub late_max_abs_theta_rad: f64,
+    /// mean theta at impacts, rad.
+    pub mean_theta_rad: f64,
+    /// The stability-map class of this run (`analysis::classify`).
+    pub class: CellClass,
+    /// Gap evaluations of all contact searches.
+    pub gap_evaluations: usize,
+    /// Simulated time, s (= end_time_s).
+    pub sim_time_s: f64,
+    /// Wall-clock time of the simulation, s.
+    pub wall_time_s: f64,
+}
+
+pub(super) fn law_angle(model: &PlanarModel, r: &ImpactRecord) -> f64 {
+    model.body.law_angle_rad(&r.before)
+}
+
+pub(super) fn max_abs_theta(model: &PlanarModel, rs: &[ImpactRecord]) -> f64 {
+    rs.iter()
+        .fold(0.0f64, |m, r| m.max(law_angle(model, r).abs()))
+}
+
+/// eq. 16's kappa_crit at the model's target energy (NaN for a point mass / no flight).
+pub(super) fn kappa_crit_of(model: &PlanarModel) -> f64 {
+    match (model.body, analysis::fixed_point_velocity_mps(model)) {
+        (Body::Rigid { rho_m, l_m }, Ok(y)) => kappa_crit(model.gravity_mps2, rho_m, l_m, y, 1.0),
+        _ => f64::NAN,
+    }
+}
+
+pub(super) fn summarize(
+    name: &str,
+    p: &PlanarParams,
+    model: &PlanarModel,
+    run: &PlanarRun,
+    requested: usize,
+    wall_s: f64,
+) -> RunSummary {
+    let n = run.impacts.len();
+    let late = &run.impacts[n - (n / 4).max(1).min(n)..];
+    let eta_star = model.feedback.target_energy_jpkg();
+    let late_mean = if late.is_empty() {
+        f64::NAN
+    } else {
+        late.iter().map(|r| r.energy_jpkg).sum::<f64>() / late.len() as f64
+    };
+    let end_time = run.impacts.last().map_or(0.0, |r| r.time_s);
+    RunSummary {
+        scene: name.to_string(),
+        body: match model.body {
+            Body::PointMass => "point_mass",
+            Body::Rigid { .. } => "rigid",
+        },
+        contact: match model.contact {
+            ContactLaw::Frictionless => "frictionless",
+            ContactLaw::Coulomb { .. } => "coulomb",
+        },
+        rho_m: model.rho_m(),
+        l_m: model.l_m(),
+        gravity_mps2: model.gravity_mps2,
+        kappa: model.tilt.kappa(),
+        kappa_e_s2pm2: model.feedback.kappa_e_s2pm2(),
+        restitution: model.feedback.e(),
+        friction_mu: p.friction_mu,
+        timing_noise_s: model.timing_noise_s,
+        seed: p.seed,
+        kappa_crit_eq16: kappa_crit_of(model),
+        impacts_requested: requested,
+        impacts: n,
+        end: run.end,
+        stayed_up: run.end == RunEnd::Completed,
+        end_time_s: end_time,
+        target_energy_jpkg: eta_star,
+        first_energy_jpkg: run.impacts.first().map_or(f64::NAN, |r| r.energy_jpkg),
+        late_window_impacts: late.len(),
+        late_mean_energy_jpkg: late_mean,
+        late_mean_energy_rel_error: (late_mean - eta_star) / eta_star,
+        max_abs_theta_rad: max_abs_theta(model, &run.impacts),
+        late_max_abs_theta_rad: max_abs_theta(model, late),
+        mean_theta_rad: if n == 0 {
+            f64::NAN
+        } else {
+            run.impacts.iter().map(|r| law_angle(model, r)).sum::<f64>() / n as f64
+        },
+        class: analysis::classify(model, run),
+        gap_evaluations: run.gap_evaluations,
+        sim_time_s: end_time,
+        wall_time_s: wall_s,
+    }
+}
+
+fn end_words(end: RunEnd) -> &'static str {
+    match end {
+        RunEnd::Completed => "completed",
+        RunEnd::TippedOver => "tipped over (|theta| reached the tip angle)",
+        RunEnd::NoSeparation => "no separation (the body no longer flies off the table)",
+        RunEnd::NoContact => "no contact found",
+        RunEnd::Jam => "Painleve jam in a frictional impact",
+        RunEnd::NonFinite => "a state became non-finite",
+    }
+}
+
+pub(super) fn class_name(c: CellClass) -> &'static str {
+    match c {
+        CellClass::Converges => "converges",
+        CellClass::Drifts => "drifts",
+        CellClass::TipsOver => "tips_over",
+        CellClass::Diverges => "diverges",
+    }
+}
+
+pub(super) fn class_words(c: CellClass) -> &'static str {
+    match c {
+        CellClass::Converges => "stays up and converges",
+        CellClass::Drifts => "stays up, drifts",
+        CellClass::TipsOver => "tips over",
+        CellClass::Diverges => "diverges / lost",
+    }
+}
+
+/// The scene's lines of the summary: model, control, contact.
+fn scene_text(s: &RunSummary) -> String {
+    let mut o = format!("planar scene {}\n", s.scene);
+    let _ = match s.body {
+        "rigid" => writeln!(
+            o,
+            "  model:        rigid body, rho {} m, l {} m, G {} m/s^2, {}",
+            s.rho_m, s.l_m, s.gravity_mps2, s.contact
+        ),
+        _ => writeln!(
+            o,
+            "  model:        point mass, G {} m/s^2, {}",
+            s.gravity_mps2, s.contact
+        ),
+    };
+    let _ = writeln!(
+        o,
+        "  control:      kappa {}, kappa_E {} s^2/m^2 ({})",
+        s.kappa,
+        s.kappa_e_s2pm2,
+        if s.kappa_crit_eq16.is_nan() {
+            "point mass: the angle converges for 0 < kappa < 1, eq. 4".to_string()
+        } else {
+            format!("kappa_crit eq. 16: {:.4}", s.kappa_crit_eq16)
+        }
+    );
+    let _ = writeln!(
+        o,
+        "  contact:      e {}, mu {}, timing noise sigma {} s (seed {})",
+        s.restitution, s.friction_mu, s.timing_noise_s, s.seed
+    );
+    o
+}
+
+pub(super) fn summary_text(s: &RunSummary) -> String {
+    let mut o = scene_text(s);
+    if s.stayed_up {
+        let _ = writeln!(
+            o,
+            "  outcome:      {} of {} impacts, stayed up{}",
+            s.impacts,
+            s.impacts_requested,
+            if s.body == "rigid" { " (upright)" } else { "" }
+        );
+    } else {
+        let _ = writeln!(
+            o,
+            "  outcome:      ended after {} of {} impacts at t = {:.4} s: {}",
+            s.impacts,
+            s.impacts_requested,
+            s.end_time_s,
+            end_words(s.end)
+        );
+    }
+    let _ = writeln!(
+        o,
+        "  energy:       eta* {:.5} J/kg; first impact {:.5} J/kg; late mean (last {} impacts) {:.5} J/kg ({:+.2} % of eta*)",
+        s.target_energy_jpkg,
+        s.first_energy_jpkg,
+        s.late_window_impacts,
+        s.late_mean_energy_jpkg,
+        100.0 * s.late_mean_energy_rel_error
+    );
+    let _ = writeln!(
+        o,
+        "  theta:        max |theta| {:.4} rad (late {:.4} rad), mean {:+.4} rad",
+        s.max_abs_theta_rad, s.late_max_abs_theta_rad, s.mean_theta_rad
+    );
+    let _ = writeln!(o, "  class:        {}", class_words(s.class));
+    let _ = writeln!(
+        o,
+        "  time:         simulated {:.3} s, wall {:.3} ms ({} gap evaluations)",
+        s.sim_time_s,
+        1e3 * s.wall_time_s,
+        s.gap_evaluations
+    );
+    o
+}

@@ -1,0 +1,49 @@
+//! Helpers the binary's tests share: running `dexter`, the shipped scenes, scratch
+//! directories.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+/// Run the `dexter` binary with `args`.
+pub fn dexter(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dexter"))
+        .args(args)
+        .output()
+        .expect("the dexter binary runs")
+}
+
+/// Run it and insist on success (the failure shows stderr).
+pub fn ok(args: &[&str]) -> Output {
+    let out = dexter(args);
+    assert!(
+        out.status.success(),
+        "dexter {args:?} failed ({:?}): {}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// The one JSON object a successful run of `args` prints.
+pub fn json(args: &[&str]) -> serde_json::Value {
+    serde_json::from_slice(&ok(args).stdout).expect("stdout is one JSON object")
+}
+
+/// The path of `scenes/{name}.toml`.
+pub fn scene(name: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("scenes")
+        .join(format!("{name}.toml"))
+        .display()
+        .to_string()
+}
+
+/// A fresh, empty scratch directory for this test process.
+pub fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("dexter-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}

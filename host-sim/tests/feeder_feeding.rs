@@ -1,0 +1,209 @@
+//! The feeding property (issue 16, sec. 3.2 of the paper): for random polygons, every
+//! simulated execution of the planned feed from random arrival poses ends on the planned
+//! goal edge within 1 mm of the goal radius, and the planner finds a plan for every part
+//! the paper says it must.
+//!
+//! The paper proves the property for an infinitely long fence over an infinitely wide
+//! belt with fence angles anywhere in (-90, 90) deg. We use a long fence (3 m) and wide
+//! belt (6 m) for parts about 5 cm across, and fence angles within +-80 deg, so "must
+//! have a plan" here means: every
+//! counter-clockwise gap between consecutive stable edges that a plan may have to cross
+//! is at most 150 deg (turns need theta+ - theta- = Psi within +-80 deg), and no hull
+//! edge is within 5 % of its length of the stable/unstable boundary (the minimum contact
+//! radius grows without bound there). Parts outside these bounds are generated, counted
+//! and skipped, never silently passed.
+//!
+//! Always on: a few polygons (`cargo test -p dexter-sim --test feeder_feeding`). The full
+//! issue-16 sweep (200 convex and 50 nonconvex parts, 20 arrivals each) is ignored by
+//! default; run it with
+//! `cargo test -p dexter-sim --release --test feeder_feeding -- --ignored --nocapture`
+//! (about 32 min on the shared 2-core machine).
+//!
+//! **Known gap**: the last full run failed 78 of 5000 feeds (1.6 %). Every failure it
+//! printed was the planner finding no plan, because our jog (a slide along the tilted
+//! fence, see `primitives`) cannot move the part outward on edges where sliding would
+//! tip it or where the return push needs a radius beyond the fence; no printed failure
+//! was an execution that missed its planned edge or radius. The test keeps the issue's
+//! strict requirement so the gap stays visible.
+
+use dexter_sim::model::feeder::execute::{execute, sweep_arrivals, SweepSpec, FEED_TOL_M};
+use dexter_sim::model::feeder::geometry::Vec2;
+use dexter_sim::model::feeder::part::Part;
+use dexter_sim::model::feeder::planner::goal::{goal_edge, has_parallel_pair, next_stable};
+use dexter_sim::model::feeder::planner::{plan, Feeder, PlanOptions};
+use dexter_sim::model::feeder::primitives::Drive;
+use dexter_sim::model::feeder::quasistatic::Medium;
+use dexter_sim::model::feeder::sim::Setup;
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+fn cell(part: Part) -> Feeder {
+    Feeder {
+        part,
+        setup: Setup {
+            medium: Medium {
+                belt_speed_mps: 0.05,
+                fence_mu: 0.3,
+            },
+            fence_length_m: 3.0,
+            belt_edge_m: 3.0,
+        },
+        drive: Drive {
+            push_rate_radps: 2.0,
+            max_rate_radps: 6.0,
+            max_angle_rad: 80f64.to_radians(),
+            jog_tilt_rad: 0.3f64.atan() + 15f64.to_radians(),
+        },
+    }
+}
+
+/// Random convex polygon: `n` points at random angles on a random ellipse, size ~5 cm.
+fn convex(rng: &mut StdRng) -> Vec<Vec2> {
+    let n = rng.random_range(3..=8);
+    let (a, b) = (
+        rng.random_range(0.015..0.035),
+        rng.random_range(0.015..0.035),
+    );
+    let mut th: Vec<f64> = (0..n).map(|_| rng.random_range(0.0..2.0 * PI)).collect();
+    th.sort_by(f64::total_cmp);
+    th.iter()
+        .map(|&t| Vec2::new(0.05 + a * t.cos(), 0.05 + b * t.sin()))
+        .collect()
+}
+
+/// Random star-shaped (generally nonconvex) polygon with 5..9 vertices.
+fn star(rng: &mut StdRng) -> Vec<Vec2> {
+    let n = rng.random_range(5..=9);
+    (0..n)
+        .map(|i| {
+            let t = 2.0 * PI * (i as f64 + rng.random_range(-0.3..0.3)) / n as f64;
+            let r = rng.random_range(0.012..0.035);
+            Vec2::new(0.05 + r * t.cos(), 0.05 + r * t.sin())
+        })
+        .collect()
+}
+
+/// Whether the paper's existence conditions hold within our limits (module doc).
+fn plan_must_exist(p: &Part) -> bool {
+    let clear = p.edges.iter().all(|e| {
+        let m = e.a_m.min(e.b_m()) / e.len_m;
+        m.abs() > 0.05
+    });
+    let goal = goal_edge(p).unwrap();
+    let gaps_ok = p.stable_edges().iter().filter(|&&s| s != goal).all(|&s| {
+        let gap = next_stable(p, s).0;
+        gap <= 150f64.to_radians() || (has_parallel_pair(p) && (gap - PI).abs() < 1e-6)
+    });
+    clear && gaps_ok
+}
+
+struct Tally {
+    parts: usize,
+    skipped: usize,
+    feeds: usize,
+}
+
+fn feeding_property(seed: u64, convex_parts: usize, star_parts: usize, arrivals: usize) -> Tally {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut parts = Vec::new();
+    let mut skipped = 0;
+    let mut attempts = 0;
+    while parts.len() < convex_parts + star_parts && attempts < 100 * (convex_parts + star_parts) {
+        attempts += 1;
+        let pts = if parts.len() < convex_parts {
+            convex(&mut rng)
+        } else {
+            star(&mut rng)
+        };
+        // Nonconvex parts count only when their center of mass lies inside (Part::new
+        // rejects the others); degenerate draws are redrawn.
+        let Ok(p) = Part::new(&pts, None) else {
+            continue;
+        };
+        if p.area_m2 < 2e-4 {
+            continue;
+        }
+        if plan_must_exist(&p) {
+            parts.push(p);
+        } else {
+            skipped += 1;
+        }
+    }
+    assert_eq!(parts.len(), convex_parts + star_parts, "generator starved");
+    let outcomes: Vec<(usize, Vec<String>)> = parts
+        .into_par_iter()
+        .enumerate()
+        .map(|(k, p)| feed_part(seed, k, p, arrivals))
+        .collect();
+    let failures: Vec<String> = outcomes.iter().flat_map(|o| o.1.iter().cloned()).collect();
+    for f in failures.iter().take(20) {
+        println!("{f}");
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} feeds failed (first ones printed above)",
+        failures.len(),
+        outcomes.len() * arrivals
+    );
+    Tally {
+        parts: outcomes.len(),
+        skipped,
+        feeds: outcomes.iter().map(|o| o.0).sum(),
+    }
+}
+
+/// Plans and executes part `k` from `arrivals` random poses; the feeds that worked and
+/// a description of every one that did not.
+fn feed_part(seed: u64, k: usize, p: Part, arrivals: usize) -> (usize, Vec<String>) {
+    let f = cell(p);
+    let spec = SweepSpec {
+        trials: arrivals,
+        seed: seed + k as u64,
+        x_range_m: (0.15, 0.6),
+        y_m: 0.1,
+    };
+    let (mut fed, mut bad) = (0, Vec::new());
+    for a in sweep_arrivals(&spec) {
+        let pl = match plan(&f, a, &PlanOptions::default()) {
+            Ok(pl) => pl,
+            Err(e) => {
+                bad.push(format!("part {k} {:?} from {a:?}: {e}", f.part.hull));
+                continue;
+            }
+        };
+        let ex = execute(&f, &pl, a, None);
+        let on_goal = ex.failure.is_none() && ex.final_edge == Some(pl.goal_edge);
+        if on_goal && ex.radius_error_m.abs() <= FEED_TOL_M && ex.reached_goal {
+            fed += 1;
+        } else {
+            bad.push(format!(
+                "part {k} from {a:?}: {:?} edge {:?} radius error {:.2e}",
+                ex.failure, ex.final_edge, ex.radius_error_m
+            ));
+        }
+    }
+    (fed, bad)
+}
+
+#[test]
+fn random_polygons_are_fed_to_the_goal_edge_and_radius() {
+    let t = feeding_property(16, 6, 3, 4);
+    assert_eq!(t.feeds, 9 * 4);
+    println!(
+        "{} parts fed from {} arrivals; {} parts outside the existence bounds skipped",
+        t.parts, t.feeds, t.skipped
+    );
+}
+
+#[test]
+#[ignore = "issue 16's full sweep, 250 parts x 20 arrivals, ~32 min in release; known to fail 1.6 % (module doc)"]
+fn feeding_property_full_sweep() {
+    let t = feeding_property(1996, 200, 50, 20);
+    println!(
+        "{} parts fed from {} arrivals; {} parts outside the existence bounds skipped",
+        t.parts, t.feeds, t.skipped
+    );
+    assert_eq!(t.feeds, 250 * 20);
+}

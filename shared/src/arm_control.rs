@@ -1,0 +1,462 @@
+//! The fixed-rate trajectory tracker of the one-joint arm (Akella, Huang, Lynch & Mason,
+//! sec. 2): it plays a planned cubic B-spline joint trajectory ([`crate::bspline`]) and
+//! tracks it with the existing PD-plus-feed-forward [`Tracker`], then turns the
+//! acceleration command into a joint torque within the motor's limit.
+//!
+//! ## Time
+//! The core owns no clock: trajectory time is `t = (seq - seq_0) dt`, where `seq_0` is the
+//! sequence number of the first valid frame. A lost frame therefore does not delay the
+//! trajectory.
+//!
+//! ## Reference
+//! For `t` in `[0, T]` the reference is the spline (angle, velocity and acceleration as
+//! feed-forward). After `T` the joint brakes at the constant `brake_accel_radps2` from the
+//! spline's end velocity `w_T` to rest (the paper's release: "the arm is maximally
+//! decelerated at the release point"), then holds:
+//!
+//! ```text
+//! theta_ref(T + s) = theta_T + w_T s - sgn(w_T) a_b s^2 / 2,   s <= |w_T| / a_b
+//! theta_ref        = theta_T + sgn(w_T) w_T^2 / (2 a_b),        afterwards
+//! ```
+//!
+//! The reference is clamped into the joint limits as the tracker does for the paddle.
+//!
+//! ## Torque
+//! The tracker's acceleration command `u` (within `±accel_max_radps2`) becomes the joint
+//! torque by the rigid-arm inverse dynamics
+//!
+//! ```text
+//! tau = J u + tau_g cos(theta + phi_g)
+//! ```
+//!
+//! with `J` the inertia about the joint (arm and payload), `tau_g` the gravity torque with
+//! the arm's centre of mass level and `phi_g` the angle of that centre of mass above the
+//! link. Validation requires `J accel_max + |tau_g| <= torque_max`, so the commanded
+//! acceleration is always realizable; the torque is clamped to `±torque_max_nm` as well.
+//!
+//! ## Safe state
+//! A non-finite or implausible measurement, a stale input, or a tracking error above
+//! `max_tracking_error_rad` puts the controller in [`Mode::Safe`] with the [`Fault`]; the
+//! fault is latched (a trajectory cannot be resumed after a gap): every later command
+//! brakes the joint to rest and holds it there with gravity compensation, and repeats the
+//! first fault code. A new controller (a new `Configure`) clears it.
+//!
+//! Every step does bounded, loop-free work (one spline segment, one polynomial cosine),
+//! allocates nothing and never panics.
+
+use crate::bspline::{Knots, SplineSample};
+use crate::fixed_rate::{FixedRate, Reply};
+use crate::math::{cos_poly_f32, Real};
+use crate::mirror::PaddleReference;
+use crate::params::{finite, non_negative, positive, ParamError};
+use crate::protocol::{Fault, Mode, Telemetry};
+use crate::state::PaddleState;
+use crate::track::{PaddleLimits, Tracker};
+use serde::{Deserialize, Serialize};
+
+/// Limits of the joint, SI units.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct JointLimits {
+    /// Lowest joint angle, rad.
+    pub min_angle_rad: f32,
+    /// Highest joint angle, rad (> min).
+    pub max_angle_rad: f32,
+    /// Largest joint speed, rad/s (> 0).
+    pub velocity_max_radps: f32,
+    /// Largest commanded joint acceleration, rad/s^2 (> 0).
+    pub accel_max_radps2: f32,
+    /// Largest joint torque magnitude, N m (> 0).
+    pub torque_max_nm: f32,
+}
+
+impl JointLimits {
+    /// The same limits in the tracker's (unit-agnostic) form.
+    fn tracker_limits(&self) -> PaddleLimits {
+        PaddleLimits {
+            min_height_m: self.min_angle_rad,
+            max_height_m: self.max_angle_rad,
+            velocity_max_mps: self.velocity_max_radps,
+            accel_max_mps2: self.accel_max_radps2,
+        }
+    }
+}
+
+/// Everything an arm controller needs, SI units, f32 (sent over the wire in HIL; about
+/// 130 bytes postcard-encoded).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ArmParams {
+    /// Control period, s (> 0).
+    pub dt_s: f32,
+    /// Tracking stiffness, 1/s^2 (>= 0).
+    pub kp_per_s2: f32,
+    /// Tracking damping, 1/s (>= 0).
+    pub kd_per_s: f32,
+    /// Joint limits.
+    pub limits: JointLimits,
+    /// Inertia about the joint, arm and payload, kg m^2 (> 0).
+    pub inertia_kgm2: f32,
+    /// Gravity torque with the centre of mass level, N m (>= 0): m g r.
+    pub gravity_torque_nm: f32,
+    /// Angle of the centre of mass above the link direction, rad (finite).
+    pub gravity_phase_rad: f32,
+    /// Deceleration after the trajectory's end, rad/s^2 (> 0, <= accel_max).
+    pub brake_accel_radps2: f32,
+    /// Tracking error that faults the controller, rad (> 0).
+    pub max_tracking_error_rad: f32,
+    /// Periods without a new sample before the input counts as stale (>= 1).
+    pub stale_limit_steps: u16,
+    /// The planned joint trajectory.
+    pub trajectory: Knots,
+}
+
+impl Default for ArmParams {
+    /// A 1 kHz controller for an NSK-like arm (J = 2.2 kg m^2, 100 N m), holding 0 rad.
+    fn default() -> Self {
+        Self {
+            dt_s: 0.001,
+            kp_per_s2: 3600.0,
+            kd_per_s: 120.0,
+            limits: JointLimits {
+                min_angle_rad: -1.6,
+                max_angle_rad: 1.6,
+                velocity_max_radps: 8.0,
+                accel_max_radps2: 30.0,
+                torque_max_nm: 100.0,
+            },
+            inertia_kgm2: 2.2,
+            gravity_torque_nm: 25.0,
+            gravity_phase_rad: 0.0,
+            brake_accel_radps2: 30.0,
+            max_tracking_error_rad: 0.2,
+            stale_limit_steps: 5,
+            trajectory: Knots::default(),
+        }
+    }
+}
+
+impl ArmParams {
+    /// Check every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        positive("dt_s", self.dt_s)?;
+        let l = &self.limits;
+        Tracker::new(self.kp_per_s2, self.kd_per_s, l.tracker_limits(), self.dt_s)
+            .map_err(rename_limit)?;
+        positive("limits.torque_max_nm", l.torque_max_nm)?;
+        positive("inertia_kgm2", self.inertia_kgm2)?;
+        non_negative("gravity_torque_nm", self.gravity_torque_nm)?;
+        finite("gravity_phase_rad", self.gravity_phase_rad)?;
+        if self.inertia_kgm2 * l.accel_max_radps2 + self.gravity_torque_nm > l.torque_max_nm {
+            return Err(ParamError::OutOfRange("limits.accel_max_radps2"));
+        }
+        positive("brake_accel_radps2", self.brake_accel_radps2)?;
+        if self.brake_accel_radps2 > l.accel_max_radps2 {
+            return Err(ParamError::OutOfRange("brake_accel_radps2"));
+        }
+        positive("max_tracking_error_rad", self.max_tracking_error_rad)?;
+        if self.stale_limit_steps == 0 {
+            return Err(ParamError::NotPositive("stale_limit_steps"));
+        }
+        self.trajectory.validate()?;
+        self.validate_trajectory_limits()
+    }
+
+    /// The whole reference stays within the joint limits (B-spline convex hull: every
+    /// control point within the angle range, every difference `|P_i+1 - P_i| / h` within
+    /// the speed limit, and the braking tail's stop angle within the range).
+    fn validate_trajectory_limits(&self) -> Result<(), ParamError> {
+        let l = &self.limits;
+        let k = &self.trajectory;
+        let range = l.min_angle_rad..=l.max_angle_rad;
+        if k.points().iter().any(|p| !range.contains(p)) {
+            return Err(ParamError::OutOfRange("trajectory.points_rad"));
+        }
+        let too_fast = k
+            .points()
+            .windows(2)
+            .any(|w| (w[1] - w[0]).abs() > l.velocity_max_radps * k.segment_s);
+        if too_fast {
+            return Err(ParamError::OutOfRange("trajectory.points_rad"));
+        }
+        let end = k.sample(k.duration_s()).unwrap_or_default();
+        let w = end.velocity_radps;
+        let stop = end.angle_rad + w * w.abs() / (2.0 * self.brake_accel_radps2);
+        if !range.contains(&stop) {
+            return Err(ParamError::OutOfRange("brake_accel_radps2"));
+        }
+        Ok(())
+    }
+}
+
+/// The tracker names its limits as a paddle's; give them the joint's names.
+fn rename_limit(e: ParamError) -> ParamError {
+    let rename = |p: &'static str| match p {
+        "limits.min_height_m" => "limits.min_angle_rad",
+        "limits.max_height_m" => "limits.max_angle_rad",
+        "limits.velocity_max_mps" => "limits.velocity_max_radps",
+        "limits.accel_max_mps2" => "limits.accel_max_radps2",
+        other => other,
+    };
+    match e {
+        ParamError::NotFinite(p) => ParamError::NotFinite(rename(p)),
+        ParamError::NotPositive(p) => ParamError::NotPositive(rename(p)),
+        ParamError::Negative(p) => ParamError::Negative(rename(p)),
+        ParamError::OutOfRange(p) => ParamError::OutOfRange(rename(p)),
+    }
+}
+
+/// One sample of the arm's joint, sent to the controller every control period.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ArmFrame {
+    /// Sample sequence number (advances by one per control period).
+    pub seq: u32,
+    /// Measured joint angle, rad.
+    pub angle_rad: f32,
+    /// Measured joint velocity, rad/s.
+    pub velocity_radps: f32,
+}
+
+/// The arm controller's output for one control period.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ArmCommand {
+    /// Sequence number of the frame this command answers.
+    pub seq: u32,
+    /// Joint torque, N m, held for one period; within `±torque_max_nm`.
+    pub torque_nm: f32,
+    /// Acceleration the torque is meant to produce, rad/s^2.
+    pub accel_cmd_radps2: f32,
+    /// Reference angle, rad (informational).
+    pub angle_ref_rad: f32,
+    /// Reference velocity, rad/s (informational).
+    pub velocity_ref_radps: f32,
+    /// [`Mode::Track`] on the trajectory, [`Mode::Hold`] after it, [`Mode::Safe`] faulted.
+    pub mode: Mode,
+    /// Fault code; [`Fault::None`] unless `mode == Mode::Safe`.
+    pub fault: Fault,
+}
+
+impl Reply for ArmCommand {
+    fn seq(&self) -> u32 {
+        self.seq
+    }
+
+    fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    fn fault(&self) -> Fault {
+        self.fault
+    }
+
+    fn bit_identical(&self, other: &Self) -> bool {
+        self.seq == other.seq
+            && self.torque_nm.to_bits() == other.torque_nm.to_bits()
+            && self.accel_cmd_radps2.to_bits() == other.accel_cmd_radps2.to_bits()
+            && self.angle_ref_rad.to_bits() == other.angle_ref_rad.to_bits()
+            && self.velocity_ref_radps.to_bits() == other.velocity_ref_radps.to_bits()
+            && self.mode == other.mode
+            && self.fault == other.fault
+    }
+}
+
+/// The arm's trajectory-tracking controller, stepped at a fixed rate.
+#[derive(Clone, Debug)]
+pub struct ArmController {
+    params: ArmParams,
+    tracker: Tracker,
+    first_seq: Option<u32>,
+    last_seq: u32,
+    stale_steps: u16,
+    fault: Fault,
+    /// Last valid joint measurement, dead-reckoned with our own commands while faulted.
+    joint: PaddleState<f32>,
+    last_error_rad: f32,
+}
+
+impl ArmController {
+    /// A controller; the error names the first invalid parameter.
+    pub fn new(params: ArmParams) -> Result<Self, ParamError> {
+        params.validate()?;
+        let tracker = Tracker::new(
+            params.kp_per_s2,
+            params.kd_per_s,
+            params.limits.tracker_limits(),
+            params.dt_s,
+        )?;
+        let start = params.trajectory.sample(0.0).unwrap_or_default();
+        Ok(Self {
+            params,
+            tracker,
+            first_seq: None,
+            last_seq: 0,
+            stale_steps: 0,
+            fault: Fault::None,
+            joint: PaddleState::new(start.angle_rad, 0.0),
+            last_error_rad: 0.0,
+        })
+    }
+
+    /// The reference at trajectory time `t_s`: the spline, then braking, then holding.
+    pub fn reference(&self, t_s: f32) -> SplineSample<f32> {
+        let k = &self.params.trajectory;
+        let end_s = k.duration_s();
+        if t_s <= end_s {
+            return k.sample(t_s).unwrap_or_default();
+        }
+        let end = k.sample(end_s).unwrap_or_default();
+        let a = self.params.brake_accel_radps2;
+        let w = end.velocity_radps;
+        let dir = if w < 0.0 { -1.0 } else { 1.0 };
+        let stop_s = w.abs() / a;
+        let s = (t_s - end_s).min_r(stop_s);
+        let moving = t_s - end_s < stop_s;
+        SplineSample {
+            angle_rad: end.angle_rad + w * s - 0.5 * dir * a * s * s,
+            velocity_radps: if moving { w - dir * a * s } else { 0.0 },
+            accel_radps2: if moving { -dir * a } else { 0.0 },
+        }
+    }
+
+    /// Torque for acceleration `accel_radps2` at angle `angle_rad` (inverse dynamics),
+    /// clamped to `±torque_max_nm`.
+    pub fn torque_for(&self, accel_radps2: f32, angle_rad: f32) -> f32 {
+        let p = &self.params;
+        let tau = p.inertia_kgm2 * accel_radps2
+            + p.gravity_torque_nm * cos_poly_f32(angle_rad + p.gravity_phase_rad);
+        let m = p.limits.torque_max_nm;
+        tau.clamp_r(-m, m)
+    }
+
+    /// Reference minus measured angle at the last step, rad.
+    pub fn tracking_error_rad(&self) -> f32 {
+        self.last_error_rad
+    }
+
+    /// The latched fault, [`Fault::None`] while running.
+    pub fn fault(&self) -> Fault {
+        self.fault
+    }
+
+    /// One control period: the command for `frame`.
+    pub fn step(&mut self, frame: &ArmFrame) -> ArmCommand {
+        if self.fault != Fault::None {
+            return self.safe(frame.seq, self.fault);
+        }
+        if let Err(fault) = self.check(frame) {
+            return self.safe(frame.seq, fault);
+        }
+        let joint = PaddleState::new(frame.angle_rad, frame.velocity_radps);
+        self.joint = joint;
+        let first = *self.first_seq.get_or_insert(frame.seq);
+        let t_s = self.last_seq.wrapping_sub(first) as f32 * self.params.dt_s;
+        let r = self.reference(t_s);
+        let r = self.tracker.clamp_reference(PaddleReference {
+            height_m: r.angle_rad,
+            velocity_mps: r.velocity_radps,
+            accel_mps2: r.accel_radps2,
+        });
+        self.last_error_rad = r.height_m - joint.height_m;
+        if self.last_error_rad.abs() > self.params.max_tracking_error_rad {
+            return self.safe(frame.seq, Fault::OutOfRange);
+        }
+        let u = self.tracker.command(&r, &joint);
+        let done = t_s > self.params.trajectory.duration_s() && r.velocity_mps == 0.0;
+        ArmCommand {
+            seq: frame.seq,
+            torque_nm: self.torque_for(u, joint.height_m),
+            accel_cmd_radps2: u,
+            angle_ref_rad: r.height_m,
+            velocity_ref_radps: r.velocity_mps,
+            mode: if done { Mode::Hold } else { Mode::Track },
+            fault: Fault::None,
+        }
+    }
+
+    /// The safe command: latch `fault`, brake the joint to rest and hold it there.
+    pub fn safe(&mut self, seq: u32, fault: Fault) -> ArmCommand {
+        if self.fault == Fault::None {
+            self.fault = fault;
+        }
+        let u = self.tracker.brake(&self.joint);
+        let dt = self.params.dt_s;
+        let j = self.joint;
+        self.joint = PaddleState::new(
+            j.height_m + j.velocity_mps * dt + 0.5 * u * dt * dt,
+            j.velocity_mps + u * dt,
+        );
+        ArmCommand {
+            seq,
+            torque_nm: self.torque_for(u, j.height_m),
+            accel_cmd_radps2: u,
+            angle_ref_rad: self.joint.height_m,
+            velocity_ref_radps: 0.0,
+            mode: Mode::Safe,
+            fault: self.fault,
+        }
+    }
+
+    /// Validate a frame and count stale repeats (a repeated sample keeps the time).
+    fn check(&mut self, frame: &ArmFrame) -> Result<(), Fault> {
+        if !frame.angle_rad.is_finite() || !frame.velocity_radps.is_finite() {
+            return Err(Fault::NonFinite);
+        }
+        let l = &self.params.limits;
+        let margin = 0.05 * (l.max_angle_rad - l.min_angle_rad);
+        let range = (l.min_angle_rad - margin)..=(l.max_angle_rad + margin);
+        if !range.contains(&frame.angle_rad)
+            || frame.velocity_radps.abs() > 2.0 * l.velocity_max_radps
+        {
+            return Err(Fault::OutOfRange);
+        }
+        let fresh = match self.first_seq {
+            None => true,
+            Some(_) => {
+                let ahead = frame.seq.wrapping_sub(self.last_seq);
+                ahead != 0 && ahead < u32::MAX / 2
+            }
+        };
+        if fresh {
+            self.last_seq = frame.seq;
+            self.stale_steps = 0;
+        } else {
+            self.stale_steps = self.stale_steps.saturating_add(1);
+            if self.stale_steps > self.params.stale_limit_steps {
+                return Err(Fault::Stale);
+            }
+        }
+        Ok(())
+    }
+}
+
+impl FixedRate for ArmController {
+    type Params = ArmParams;
+    type Frame = ArmFrame;
+    type Command = ArmCommand;
+    /// Provisional: the static argument and the QEMU measurement come with the arm's HIL
+    /// integration, which must confirm or replace this figure.
+    const STEP_INSTRUCTION_BUDGET: u32 = 600;
+
+    fn new(params: ArmParams) -> Result<Self, ParamError> {
+        ArmController::new(params)
+    }
+
+    fn params(&self) -> &ArmParams {
+        &self.params
+    }
+
+    fn step(&mut self, frame: &ArmFrame) -> ArmCommand {
+        ArmController::step(self, frame)
+    }
+
+    fn safe(&mut self, seq: u32, fault: Fault) -> ArmCommand {
+        ArmController::safe(self, seq, fault)
+    }
+
+    fn telemetry(&self) -> Telemetry {
+        // No estimator: the core knows none of the telemetry's ball fields.
+        Telemetry::default()
+    }
+}
