@@ -23,6 +23,8 @@ pub struct Axis {
     kd: f32,
     /// 2 a_max, u/s^2.
     two_a: f32,
+    /// 1 / dt, 1/s (the tracker's law multiplies by it, as [`crate::track::Tracker`]).
+    inv_dt: f32,
     /// Position held while there is no valid estimate, u.
     pub home: f32,
     /// Reference position now, u.
@@ -32,14 +34,15 @@ pub struct Axis {
 }
 
 impl Axis {
-    /// An axis at rest at `home` with stiffness `kp` (1/s^2) and damping `kd` (1/s); the
-    /// caller has validated every value.
-    pub fn new(limits: AxisLimits, kp: f32, kd: f32, home: f32) -> Self {
+    /// An axis at rest at `home` with stiffness `kp` (1/s^2) and damping `kd` (1/s),
+    /// stepped every `dt` s; the caller has validated every value.
+    pub fn new(limits: AxisLimits, kp: f32, kd: f32, home: f32, dt: f32) -> Self {
         Self {
             limits,
             kp,
             kd,
             two_a: 2.0 * limits.accel_max,
+            inv_dt: 1.0 / dt,
             home,
             p: home,
             v: 0.0,
@@ -53,25 +56,29 @@ impl Axis {
         let l = &self.limits;
         let u = a_ff + self.kp * (self.p - m.height_m) + self.kd * (self.v - m.velocity_mps);
         let v_raw = m.velocity_mps + u * dt;
-        // the clamp of v_raw into [-v_down, v_up] (0 lies inside): only one side can bind
-        let v_next = if v_raw > 0.0 {
-            let room = (l.max - m.height_m).max_r(0.0);
-            let v_up = l.velocity_max.min_r(Real::sqrt(self.two_a * room));
-            if v_raw > v_up {
-                v_up
-            } else {
-                v_raw
-            }
+        // the clamp of v_raw into [-v_down, v_up] (0 lies inside): only the side v_raw is
+        // on can bind (NaN: the lower side, as `clamp_r` maps it)
+        let up = v_raw > 0.0;
+        let room = if up {
+            l.max - m.height_m
         } else {
-            let room = (m.height_m - l.min).max_r(0.0);
-            let v_down = l.velocity_max.min_r(Real::sqrt(self.two_a * room));
-            if v_raw >= -v_down {
-                v_raw
-            } else {
-                -v_down
-            }
+            m.height_m - l.min
         };
-        let u_v = (v_next - m.velocity_mps) / dt;
+        let v_lim = l
+            .velocity_max
+            .min_r(Real::sqrt(self.two_a * room.max_r(0.0)));
+        let v_next = if up {
+            if v_raw > v_lim {
+                v_lim
+            } else {
+                v_raw
+            }
+        } else if v_raw >= -v_lim {
+            v_raw
+        } else {
+            -v_lim
+        };
+        let u_v = (v_next - m.velocity_mps) * self.inv_dt;
         let limited = u_v.clamp_r(-l.accel_max, l.accel_max);
         (limited, v_next != v_raw || limited != u_v)
     }
@@ -91,15 +98,15 @@ impl Axis {
 
     /// The feed-forward that brings the reference velocity to rest within the limit.
     #[inline]
-    pub fn brake_reference(&self, dt: f32) -> f32 {
-        (-self.v / dt).clamp_r(-self.limits.accel_max, self.limits.accel_max)
+    pub fn brake_reference(&self) -> f32 {
+        (-self.v * self.inv_dt).clamp_r(-self.limits.accel_max, self.limits.accel_max)
     }
 
     /// The acceleration that stops `m` in one period if it can, else the largest braking
     /// acceleration (the safe state; [`crate::track::Tracker::brake`]'s law).
     #[inline]
-    pub fn brake(&self, m: &PaddleState<f32>, dt: f32) -> f32 {
-        (-m.velocity_mps / dt).clamp_r(-self.limits.accel_max, self.limits.accel_max)
+    pub fn brake(&self, m: &PaddleState<f32>) -> f32 {
+        (-m.velocity_mps * self.inv_dt).clamp_r(-self.limits.accel_max, self.limits.accel_max)
     }
 }
 
@@ -130,7 +137,7 @@ mod tests {
             dt,
         )
         .unwrap();
-        let mut axis = Axis::new(limits, 2500.0, 100.0, 0.0);
+        let mut axis = Axis::new(limits, 2500.0, 100.0, 0.0, dt);
         let mut saturated = 0;
         let values = [-0.15f32, -0.1, -0.099, -0.03, 0.0, 0.02, 0.0999, 0.1, 0.12];
         let speeds = [-3.0f32, -2.0, -0.5, 0.0, 0.3, 1.9, 2.5, f32::NAN];
@@ -167,7 +174,7 @@ mod tests {
         assert!(!axis.command(1.0, &PaddleState::new(0.0, 0.0), dt).1);
         assert!(axis.command(1e4, &PaddleState::new(0.0, 0.0), dt).1);
         assert_eq!(
-            axis.brake(&PaddleState::new(0.0, 0.2), dt),
+            axis.brake(&PaddleState::new(0.0, 0.2)),
             tracker.brake(&PaddleState::new(0.0, 0.2))
         );
     }

@@ -284,7 +284,7 @@ impl FlightEstimator {
         self.samples = 0;
         self.since_sample = 0;
         self.outliers = 0;
-        self.planned = NO_PLAN;
+        self.drop_plan();
     }
 
     /// True once the fit holds `settle_samples` samples.
@@ -327,7 +327,13 @@ impl FlightEstimator {
 
     /// Drop the planned impact.
     pub fn clear_plan(&mut self) {
-        self.planned = NO_PLAN;
+        self.drop_plan();
+    }
+
+    /// No planned impact: `in_s` infinite (the other fields are not read then).
+    #[inline]
+    fn drop_plan(&mut self) {
+        self.planned.in_s = f32::INFINITY;
     }
 
     /// The planned impact, if any (time from the state's time).
@@ -419,7 +425,7 @@ impl FlightEstimator {
         let hit = self
             .model
             .collide(&mut s, sc, p.sin_alpha, p.cos_alpha, p.normal_velocity_mps);
-        self.planned = NO_PLAN;
+        self.drop_plan();
         if hit {
             let prior = u16::from(self.tuning.impact_prior_samples);
             self.samples = self.samples.min(prior);
@@ -438,7 +444,7 @@ impl FlightEstimator {
         };
         self.samples = 1;
         self.outliers = 0;
-        self.planned = NO_PLAN;
+        self.drop_plan();
     }
 }
 

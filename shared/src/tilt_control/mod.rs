@@ -827,8 +827,8 @@ impl<T: SinCos> TiltControllerWith<T> {
             restitution: p.restitution,
         };
         let (t, s) = (&p.tilt, &p.stroke);
-        let tilt = Axis::new(t.limits(), t.kp_per_s2, t.kd_per_s, t.home_rad);
-        let stroke = Axis::new(s.limits(), s.kp_per_s2, s.kd_per_s, s.home_m);
+        let tilt = Axis::new(t.limits(), t.kp_per_s2, t.kd_per_s, t.home_rad, p.dt_s);
+        let stroke = Axis::new(s.limits(), s.kp_per_s2, s.kd_per_s, s.home_m, p.dt_s);
         Ok(Self {
             params,
             law,
@@ -901,17 +901,16 @@ impl<T: SinCos> TiltControllerWith<T> {
         self.active = None;
         self.mode = Mode::Safe;
         let dt = self.params.dt_s;
-        let mut u = [0.0f32; 2];
-        for (k, axis) in [&self.tilt, &self.stroke].into_iter().enumerate() {
-            if let (Some(s), Some(uk)) = (self.table.get_mut(k), u.get_mut(k)) {
-                *uk = axis.brake(s, dt);
-                *s = PaddleState::new(
-                    s.height_m + (s.velocity_mps + 0.5 * *uk * dt) * dt,
-                    s.velocity_mps + *uk * dt,
-                );
-            }
-        }
-        let [ut, us] = u;
+        let [tilt, stroke] = self.table;
+        let (ut, us) = (self.tilt.brake(&tilt), self.stroke.brake(&stroke));
+        // dead-reckoned under the braking, for the next safe period
+        let ahead = |s: PaddleState<f32>, u: f32| {
+            PaddleState::new(
+                s.height_m + (s.velocity_mps + 0.5 * u * dt) * dt,
+                s.velocity_mps + u * dt,
+            )
+        };
+        self.table = [ahead(tilt, ut), ahead(stroke, us)];
         let [tilt, stroke] = self.table;
         TiltCommand {
             seq,
@@ -1025,10 +1024,7 @@ impl<T: SinCos> TiltControllerWith<T> {
             None if self.unreachable => (PlanStatus::Unreachable, 0.0),
             None => (PlanStatus::Idle, 0.0),
         };
-        let ff = [
-            self.tilt.brake_reference(dt),
-            self.stroke.brake_reference(dt),
-        ];
+        let ff = [self.tilt.brake_reference(), self.stroke.brake_reference()];
         (ff, status, impact_in_s)
     }
 
@@ -1185,16 +1181,16 @@ impl<T: SinCos> TiltControllerWith<T> {
         // fault it was is sorted out only on that path
         let in_range = self.bounds.contain(frame);
         if !in_range {
-            let values = [
-                frame.body_x_m,
-                frame.body_y_m,
-                frame.body_theta_rad,
-                frame.table_angle_rad,
-                frame.table_rate_radps,
-                frame.table_height_m,
-                frame.table_velocity_mps,
-            ];
-            return Err(if values.iter().all(|v| v.is_finite()) {
+            // x * 0 is 0 for every finite x (however large) and NaN otherwise
+            let f = frame;
+            let probe = f.body_x_m * 0.0
+                + f.body_y_m * 0.0
+                + f.body_theta_rad * 0.0
+                + f.table_angle_rad * 0.0
+                + f.table_rate_radps * 0.0
+                + f.table_height_m * 0.0
+                + f.table_velocity_mps * 0.0;
+            return Err(if probe == 0.0 {
                 Fault::OutOfRange
             } else {
                 Fault::NonFinite
