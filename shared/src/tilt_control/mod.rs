@@ -963,10 +963,9 @@ impl<T: SinCos> TiltControllerWith<T> {
             self.mode = Mode::Hold;
             self.active = None;
             self.estimator.clear_plan();
-            for axis in [&mut self.tilt, &mut self.stroke] {
-                axis.p = axis.home;
-                axis.v = 0.0;
-            }
+            // both axes home (written out: no loop in the step)
+            (self.tilt.p, self.tilt.v) = (self.tilt.home, 0.0);
+            (self.stroke.p, self.stroke.v) = (self.stroke.home, 0.0);
             ([0.0, 0.0], PlanStatus::Idle, 0.0)
         };
         let [ff_t, ff_s] = ff;
