@@ -342,13 +342,61 @@ impl FlightEstimator {
     }
 
     /// One control period; `pose` is a new camera sample (x m, y m, theta rad; finite,
-    /// checked by the caller) or `None` if no new sample arrived.
+    /// checked by the caller) or `None` if no new sample arrived: [`FlightEstimator::coast`],
+    /// [`FlightEstimator::impact_period`] if [`FlightEstimator::impact_due`], else
+    /// [`FlightEstimator::sample_period`].
     pub fn step(&mut self, pose: Option<[f32; 3]>) -> FlightUpdate {
+        match pose {
+            None => {
+                self.coast();
+                FlightUpdate::default()
+            }
+            Some(_) if self.impact_due() => self.impact_period(),
+            Some(z) => self.sample_period(z),
+        }
+    }
+
+    /// A period without a new sample: the state ages by one period.
+    #[inline]
+    pub fn coast(&mut self) {
         self.since_sample = self.since_sample.saturating_add(1);
-        let Some([zx, zy, zt]) = pose else {
-            return FlightUpdate::default();
-        };
-        let span = f32::from(self.since_sample) * self.dt_s;
+    }
+
+    /// Whether a new sample this period would pass the planned impact: then the period
+    /// is [`FlightEstimator::impact_period`] (the impact model instead of the update).
+    #[inline]
+    pub fn impact_due(&self) -> bool {
+        self.samples != 0 && self.planned.in_s < self.span_to_next()
+    }
+
+    /// Time from the state's sample to a sample arriving this period, s.
+    #[inline]
+    fn span_to_next(&self) -> f32 {
+        f32::from(self.since_sample.saturating_add(1)) * self.dt_s
+    }
+
+    /// A period with a new sample when [`FlightEstimator::impact_due`]: the impact model
+    /// carries the state through the planned impact to the sample's time. The sample
+    /// itself is not used, whether the contact closes or not: the impact model replaces
+    /// the update, so the period's work is the larger of the two, not their sum (the step
+    /// budget's static argument), at the cost of one sample per flight.
+    pub fn impact_period(&mut self) -> FlightUpdate {
+        let span = self.span_to_next();
+        self.since_sample = 0;
+        let impact = self.impact(span);
+        self.outliers = 0;
+        FlightUpdate {
+            impact,
+            restarted: false,
+        }
+    }
+
+    /// A period with a new sample `z` (x, y, theta) when no impact is due: the
+    /// recursive least-squares update, or a (re)start of the fit from `z` (the first
+    /// sample, or `reinit_after` outliers in a row).
+    pub fn sample_period(&mut self, z: [f32; 3]) -> FlightUpdate {
+        let [zx, zy, zt] = z;
+        let span = self.span_to_next();
         self.since_sample = 0;
         if self.samples == 0 {
             self.restart(zx, zy, zt);
@@ -357,22 +405,9 @@ impl FlightEstimator {
                 restarted: true,
             };
         }
-        if self.planned.in_s < span {
-            // the period's sample is not used, whether the contact closes or not: the impact
-            // model replaces the update, so the period's work is bounded by the larger of
-            // the two, not their sum (the step budget's static argument), at the cost of
-            // one sample per flight
-            let impact = self.impact(span);
-            self.outliers = 0;
-            return FlightUpdate {
-                impact,
-                restarted: false,
-            };
-        }
         // no plan inside the span: infinity stays infinity
         self.planned.in_s -= span;
         let mut pred = self.state.flown(span, self.gravity_mps2);
-        let impact = false;
         let r = [zx - pred.x_m, zy - pred.y_m, zt - pred.theta_rad];
         let t = &self.tuning;
         if r[0].abs() <= t.gate_m && r[1].abs() <= t.gate_m && r[2].abs() <= t.gate_rad {
@@ -390,23 +425,17 @@ impl FlightEstimator {
             self.state = pred;
             self.samples = n;
             self.outliers = 0;
-            return FlightUpdate {
-                impact,
-                restarted: false,
-            };
+            return FlightUpdate::default();
         }
         self.state = pred;
         self.outliers = self.outliers.saturating_add(1);
-        if self.outliers >= t.reinit_after {
+        let restarted = self.outliers >= t.reinit_after;
+        if restarted {
             self.restart(zx, zy, zt);
-            return FlightUpdate {
-                impact,
-                restarted: true,
-            };
         }
         FlightUpdate {
-            impact,
-            restarted: false,
+            impact: false,
+            restarted,
         }
     }
 

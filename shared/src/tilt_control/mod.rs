@@ -939,10 +939,29 @@ impl<T: SinCos> TiltControllerWith<T> {
         let stroke_m = PaddleState::new(frame.table_height_m, frame.table_velocity_mps);
         self.table = [tilt_m, stroke_m];
         let pose = [frame.body_x_m, frame.body_y_m, frame.body_theta_rad];
-        let update = self.estimator.step(fresh.then_some(pose));
+        // the estimator's period, and the planning stage with it: in the period in which
+        // the impact model runs (the planned impact's time has come, closing or not) or the
+        // fit restarts there is none, and the code says so by its branches (each holds at
+        // most one of the impact model and a stage: the step's static bound)
+        if fresh && self.estimator.impact_due() {
+            self.estimator.impact_period();
+            self.pipeline.restart();
+        } else {
+            let restarted = if fresh {
+                self.estimator.sample_period(pose).restarted
+            } else {
+                self.estimator.coast();
+                false
+            };
+            if restarted {
+                self.pipeline.restart();
+            } else if self.mode == Mode::Track && self.estimator.valid() {
+                self.run_stage();
+            }
+        }
         let (ff, plan, impact_in_s) = if self.estimator.valid() {
             if self.mode != Mode::Track {
-                // entering Track: plan from where the table is
+                // entering Track (no stage ran): plan from where the table is
                 self.tilt.p = tilt_m.height_m;
                 self.tilt.v = tilt_m.velocity_mps;
                 self.stroke.p = stroke_m.height_m;
@@ -950,13 +969,6 @@ impl<T: SinCos> TiltControllerWith<T> {
                 self.active = None;
                 self.pipeline.restart();
                 self.mode = Mode::Track;
-            } else if update.impact || update.restarted {
-                // the impact model ran (or the fit restarted) this period: no stage
-                self.pipeline.restart();
-            } else {
-                // the first period in Track runs none either: each branch here does one
-                // of the three, so the step's longest path holds one (static bound)
-                self.run_stage();
             }
             self.feed_forward()
         } else {
