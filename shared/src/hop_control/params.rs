@@ -1,7 +1,8 @@
 //! Parameters of the fixed-rate hopper controller and their validation.
 
 use crate::hop::EnergyServoThrust;
-use crate::params::{finite, non_negative, positive, within, ParamError};
+use crate::params::ParamError;
+use crate::tilt_control::checks::Checks;
 use serde::{Deserialize, Serialize};
 
 /// Longest thrust the controller holds, in control periods (delta / dt).
@@ -144,59 +145,64 @@ impl HopParams {
     /// Check every field; the error names the first bad one.
     #[inline]
     pub fn validate(&self) -> Result<(), ParamError> {
-        within("dt_s", positive("dt_s", self.dt_s)?, 0.0, 1.0)?;
-        positive("gravity_mps2", self.gravity_mps2)?;
-        let steps = non_negative("thrust_duration_s", self.thrust_duration_s)? / self.dt_s;
-        within("thrust_duration_s", steps, 0.0, MAX_THRUST_STEPS)?;
-        self.thrust_law()?;
-        let c_max = positive("max_compression_m", self.max_compression_m)?;
-        let on = within(
-            "touchdown_compression_m",
-            self.touchdown_compression_m,
-            0.0,
-            c_max,
-        )?;
-        if on >= c_max {
-            return Err(ParamError::OutOfRange("touchdown_compression_m"));
-        }
-        within(
+        let mut c = Checks::default();
+        c.positive("dt_s", self.dt_s);
+        c.within("dt_s", self.dt_s, 0.0, 1.0);
+        c.positive("gravity_mps2", self.gravity_mps2);
+        c.non_negative("thrust_duration_s", self.thrust_duration_s);
+        let steps = self.thrust_duration_s / self.dt_s;
+        c.within("thrust_duration_s", steps, 0.0, MAX_THRUST_STEPS);
+        self.check_thrust(&mut c);
+        let c_max = self.max_compression_m;
+        c.positive("max_compression_m", c_max);
+        let on = self.touchdown_compression_m;
+        c.within("touchdown_compression_m", on, 0.0, c_max);
+        c.in_range(on < c_max, "touchdown_compression_m");
+        c.within(
             "liftoff_compression_m",
             self.liftoff_compression_m,
             -c_max,
             on,
-        )?;
-        within("bottom_hysteresis_m", self.bottom_hysteresis_m, 0.0, c_max)?;
-        if self.debounce_samples == 0 || self.debounce_samples > MAX_DEBOUNCE_SAMPLES {
-            return Err(ParamError::OutOfRange("debounce_samples"));
-        }
-        let lat = non_negative("sensor_latency_s", self.sensor_latency_s)? / self.dt_s;
-        within("sensor_latency_s", lat, 0.0, MAX_LATENCY_STEPS)?;
-        finite("liftoff_height_m", self.liftoff_height_m)?;
-        finite("body_height_min_m", self.body_height_min_m)?;
-        finite("body_height_max_m", self.body_height_max_m)?;
-        if self.body_height_max_m <= self.body_height_min_m {
-            return Err(ParamError::OutOfRange("body_height_max_m"));
-        }
-        if self.stale_limit_steps == 0 {
-            return Err(ParamError::NotPositive("stale_limit_steps"));
-        }
-        Ok(())
+        );
+        c.within("bottom_hysteresis_m", self.bottom_hysteresis_m, 0.0, c_max);
+        let debounce = self.debounce_samples;
+        c.in_range(
+            debounce > 0 && debounce <= MAX_DEBOUNCE_SAMPLES,
+            "debounce_samples",
+        );
+        c.non_negative("sensor_latency_s", self.sensor_latency_s);
+        let lat = self.sensor_latency_s / self.dt_s;
+        c.within("sensor_latency_s", lat, 0.0, MAX_LATENCY_STEPS);
+        c.finite("liftoff_height_m", self.liftoff_height_m);
+        c.finite("body_height_min_m", self.body_height_min_m);
+        c.finite("body_height_max_m", self.body_height_max_m);
+        let heights_ok = self.body_height_max_m > self.body_height_min_m;
+        c.in_range(heights_ok, "body_height_max_m");
+        c.positive_count(self.stale_limit_steps > 0, "stale_limit_steps");
+        c.result()
+    }
+
+    /// The thrust law's fields, each by its own key, tau0 first (Raibert's one number).
+    fn check_thrust(&self, c: &mut Checks) {
+        let t = &self.thrust;
+        c.non_negative("thrust.nominal_thrust_mps2", t.nominal_thrust_mps2);
+        c.non_negative("thrust.max_thrust_mps2", t.max_thrust_mps2);
+        let tau0_ok = t.nominal_thrust_mps2 <= t.max_thrust_mps2;
+        c.in_range(tau0_ok, "thrust.nominal_thrust_mps2");
+        c.non_negative("thrust.gain_per_m", t.gain_per_m);
+        c.positive("thrust.target_energy_jpkg", t.target_energy_jpkg);
     }
 
     /// The core's thrust law for these parameters; the error names the first invalid
     /// field of [`HopThrust`] (`thrust.` and the field) or `thrust_duration_s`.
     #[inline]
     pub fn thrust_law(&self) -> Result<EnergyServoThrust<f32>, ParamError> {
+        let mut c = Checks::default();
+        self.check_thrust(&mut c);
+        c.non_negative("thrust_duration_s", self.thrust_duration_s);
+        c.result()?;
+        // with the fields checked, the law's own checks pass
         let t = &self.thrust;
-        // each field by its own key, tau0 first (Raibert's one number); then the law's own
-        // checks cannot fail
-        let tau0 = non_negative("thrust.nominal_thrust_mps2", t.nominal_thrust_mps2)?;
-        if tau0 > non_negative("thrust.max_thrust_mps2", t.max_thrust_mps2)? {
-            return Err(ParamError::OutOfRange("thrust.nominal_thrust_mps2"));
-        }
-        non_negative("thrust.gain_per_m", t.gain_per_m)?;
-        positive("thrust.target_energy_jpkg", t.target_energy_jpkg)?;
-        non_negative("thrust_duration_s", self.thrust_duration_s)?;
         EnergyServoThrust::new(
             t.nominal_thrust_mps2,
             t.gain_per_m,
@@ -208,7 +214,7 @@ impl HopParams {
 }
 
 impl crate::tilt_control::fields::Fields for HopParams {
-    const COUNT: usize = 20;
+    const COUNT: usize = 19;
     const NAME: &'static str = "HopParams";
 
     fn blank() -> Self {

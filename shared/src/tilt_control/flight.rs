@@ -39,8 +39,9 @@
 //! the sample time; [`FlightEstimator::now`] flies it forward by its age (latency plus the
 //! control periods since the sample), which is exact in flight.
 
+use super::checks::Checks;
 use crate::math::Real;
-use crate::params::{non_negative, positive, ParamError};
+use crate::params::{positive, ParamError};
 use serde::{Deserialize, Serialize};
 
 /// The body's flight state, f32: centre of mass (m), angle (rad) and their rates.
@@ -115,25 +116,24 @@ impl FlightTuning {
     /// Check every field; the error names the first bad one.
     #[inline]
     pub fn validate(&self) -> Result<(), ParamError> {
-        non_negative("estimator.latency_s", self.latency_s)?;
-        if self.latency_s >= 0.1 {
-            return Err(ParamError::OutOfRange("estimator.latency_s"));
-        }
-        positive("estimator.gate_m", self.gate_m)?;
-        positive("estimator.gate_rad", self.gate_rad)?;
-        if self.memory_samples < 2 {
-            return Err(ParamError::OutOfRange("estimator.memory_samples"));
-        }
-        if self.settle_samples < 2 || u16::from(self.settle_samples) > self.memory_samples {
-            return Err(ParamError::OutOfRange("estimator.settle_samples"));
-        }
-        if self.impact_prior_samples < self.settle_samples {
-            return Err(ParamError::OutOfRange("estimator.impact_prior_samples"));
-        }
-        if self.reinit_after == 0 {
-            return Err(ParamError::NotPositive("estimator.reinit_after"));
-        }
-        Ok(())
+        let mut c = Checks::default();
+        self.check(&mut c);
+        c.result()
+    }
+
+    /// [`FlightTuning::validate`]'s checks, into `c`.
+    pub(crate) fn check(&self, c: &mut Checks) {
+        c.non_negative("estimator.latency_s", self.latency_s);
+        c.in_range(self.latency_s < 0.1, "estimator.latency_s");
+        c.positive("estimator.gate_m", self.gate_m);
+        c.positive("estimator.gate_rad", self.gate_rad);
+        c.in_range(self.memory_samples >= 2, "estimator.memory_samples");
+        let settle = self.settle_samples;
+        let settle_ok = settle >= 2 && u16::from(settle) <= self.memory_samples;
+        c.in_range(settle_ok, "estimator.settle_samples");
+        let prior_ok = self.impact_prior_samples >= settle;
+        c.in_range(prior_ok, "estimator.impact_prior_samples");
+        c.positive_count(self.reinit_after > 0, "estimator.reinit_after");
     }
 }
 

@@ -78,6 +78,7 @@
 //! 460); BENCHMARKS.md gets the figures of the firmware build at integration.
 
 pub mod axis;
+pub(crate) mod checks;
 pub mod contact;
 pub(crate) mod fields;
 pub mod flight;
@@ -86,11 +87,12 @@ pub mod sincos;
 
 use crate::fixed_rate::{FixedRate, Reply};
 use crate::math::Real;
-use crate::params::{finite, non_negative, positive, within, ParamError};
+use crate::params::ParamError;
 use crate::protocol::{Fault, Mode, Telemetry};
 use crate::state::PaddleState;
 use crate::tilt::{EnergyFeedback, TiltLaw};
 use axis::Axis;
+use checks::Checks;
 
 use contact::{
     ContactGeometry, ContactInput, ContactPrediction, ContactSolver, MAX_CONTACT_ITERATIONS,
@@ -265,29 +267,16 @@ impl TiltAxisParams {
         }
     }
 
-    #[inline]
-    fn validate(&self) -> Result<(), ParamError> {
-        within(
-            "tilt.min_rad",
-            self.min_rad,
-            -MAX_TILT_TRAVEL_RAD,
-            MAX_TILT_TRAVEL_RAD,
-        )?;
-        within(
-            "tilt.max_rad",
-            self.max_rad,
-            -MAX_TILT_TRAVEL_RAD,
-            MAX_TILT_TRAVEL_RAD,
-        )?;
-        if self.max_rad <= self.min_rad {
-            return Err(ParamError::OutOfRange("tilt.max_rad"));
-        }
-        positive("tilt.rate_max_radps", self.rate_max_radps)?;
-        positive("tilt.accel_max_radps2", self.accel_max_radps2)?;
-        non_negative("tilt.kp_per_s2", self.kp_per_s2)?;
-        non_negative("tilt.kd_per_s", self.kd_per_s)?;
-        within("tilt.home_rad", self.home_rad, self.min_rad, self.max_rad)?;
-        Ok(())
+    fn check(&self, c: &mut Checks) {
+        let travel = MAX_TILT_TRAVEL_RAD;
+        c.within("tilt.min_rad", self.min_rad, -travel, travel);
+        c.within("tilt.max_rad", self.max_rad, -travel, travel);
+        c.in_range(self.max_rad > self.min_rad, "tilt.max_rad");
+        c.positive("tilt.rate_max_radps", self.rate_max_radps);
+        c.positive("tilt.accel_max_radps2", self.accel_max_radps2);
+        c.non_negative("tilt.kp_per_s2", self.kp_per_s2);
+        c.non_negative("tilt.kd_per_s", self.kd_per_s);
+        c.within("tilt.home_rad", self.home_rad, self.min_rad, self.max_rad);
     }
 }
 
@@ -302,19 +291,15 @@ impl StrokeAxisParams {
         }
     }
 
-    #[inline]
-    fn validate(&self) -> Result<(), ParamError> {
-        finite("stroke.min_m", self.min_m)?;
-        finite("stroke.max_m", self.max_m)?;
-        if self.max_m <= self.min_m {
-            return Err(ParamError::OutOfRange("stroke.max_m"));
-        }
-        positive("stroke.velocity_max_mps", self.velocity_max_mps)?;
-        positive("stroke.accel_max_mps2", self.accel_max_mps2)?;
-        non_negative("stroke.kp_per_s2", self.kp_per_s2)?;
-        non_negative("stroke.kd_per_s", self.kd_per_s)?;
-        within("stroke.home_m", self.home_m, self.min_m, self.max_m)?;
-        Ok(())
+    fn check(&self, c: &mut Checks) {
+        c.finite("stroke.min_m", self.min_m);
+        c.finite("stroke.max_m", self.max_m);
+        c.in_range(self.max_m > self.min_m, "stroke.max_m");
+        c.positive("stroke.velocity_max_mps", self.velocity_max_mps);
+        c.positive("stroke.accel_max_mps2", self.accel_max_mps2);
+        c.non_negative("stroke.kp_per_s2", self.kp_per_s2);
+        c.non_negative("stroke.kd_per_s", self.kd_per_s);
+        c.within("stroke.home_m", self.home_m, self.min_m, self.max_m);
     }
 }
 
@@ -329,53 +314,43 @@ impl TiltParams {
     /// Check every field; the error names the first bad one.
     #[inline]
     pub fn validate(&self) -> Result<(), ParamError> {
-        within("dt_s", self.dt_s, f32::MIN_POSITIVE, 0.02)?;
-        positive("gravity_mps2", self.gravity_mps2)?;
-        positive("rho_m", self.rho_m)?;
-        positive("l_m", self.l_m)?;
-        within("restitution", self.restitution, 0.0, 1.0)?;
-        TiltLaw::new(self.kappa)?;
-        non_negative("kappa_e_s2pm2", self.kappa_e_s2pm2)?;
-        within("kappa_rate_s", self.kappa_rate_s, 0.0, 0.1)?;
-        positive("target_apex_m", self.target_apex_m)?;
-        if self.target_apex_m <= self.l_m {
-            return Err(ParamError::OutOfRange("target_apex_m"));
-        }
-        self.tilt.validate()?;
-        self.stroke.validate()?;
-        within(
-            "impact_height_m",
-            self.impact_height_m,
-            self.stroke.min_m,
-            self.stroke.max_m,
-        )?;
-        self.estimator.validate()?;
-        within("commit_s", self.commit_s, 0.0, 0.2)?;
-        if self.contact_iterations == 0 || self.contact_iterations > MAX_CONTACT_ITERATIONS {
-            return Err(ParamError::OutOfRange("contact_iterations"));
-        }
+        let mut c = Checks::default();
+        c.within("dt_s", self.dt_s, f32::MIN_POSITIVE, 0.02);
+        c.positive("gravity_mps2", self.gravity_mps2);
+        c.positive("rho_m", self.rho_m);
+        c.positive("l_m", self.l_m);
+        c.within("restitution", self.restitution, 0.0, 1.0);
+        c.note(TiltLaw::new(self.kappa));
+        c.non_negative("kappa_e_s2pm2", self.kappa_e_s2pm2);
+        c.within("kappa_rate_s", self.kappa_rate_s, 0.0, 0.1);
+        c.positive("target_apex_m", self.target_apex_m);
+        c.in_range(self.target_apex_m > self.l_m, "target_apex_m");
+        self.tilt.check(&mut c);
+        self.stroke.check(&mut c);
+        let s = &self.stroke;
+        c.within("impact_height_m", self.impact_height_m, s.min_m, s.max_m);
+        self.estimator.check(&mut c);
+        c.within("commit_s", self.commit_s, 0.0, 0.2);
+        let n = self.contact_iterations;
+        c.in_range(n > 0 && n <= MAX_CONTACT_ITERATIONS, "contact_iterations");
         // a plan is applied every cycle_periods(); the commit must come before the impact
         // is due in the estimator (one latency after it)
         let cycle_s = f32::from(self.cycle_periods()) * self.dt_s;
-        if self.commit_s <= self.estimator.latency_s + cycle_s + self.dt_s {
-            return Err(ParamError::OutOfRange("commit_s"));
-        }
-        positive("x_max_m", self.x_max_m)?;
-        finite("y_min_m", self.y_min_m)?;
-        finite("y_max_m", self.y_max_m)?;
-        if self.y_max_m <= self.y_min_m {
-            return Err(ParamError::OutOfRange("y_max_m"));
-        }
-        within(
+        let due_s = self.estimator.latency_s + cycle_s + self.dt_s;
+        c.in_range(self.commit_s > due_s, "commit_s");
+        c.positive("x_max_m", self.x_max_m);
+        c.finite("y_min_m", self.y_min_m);
+        c.finite("y_max_m", self.y_max_m);
+        c.in_range(self.y_max_m > self.y_min_m, "y_max_m");
+        let upright = core::f32::consts::FRAC_PI_2;
+        c.within(
             "theta_max_rad",
             self.theta_max_rad,
             f32::MIN_POSITIVE,
-            core::f32::consts::FRAC_PI_2,
-        )?;
-        if self.stale_limit_steps == 0 {
-            return Err(ParamError::NotPositive("stale_limit_steps"));
-        }
-        Ok(())
+            upright,
+        );
+        c.positive_count(self.stale_limit_steps > 0, "stale_limit_steps");
+        c.result()
     }
 }
 
@@ -804,19 +779,15 @@ impl<T: SinCos> TiltControllerWith<T> {
     pub fn new(params: TiltParams) -> Result<Self, ParamError> {
         params.validate()?;
         let p = &params;
-        let feedback = EnergyFeedback::new(
-            p.restitution,
-            p.kappa_e_s2pm2,
-            p.gravity_mps2 * p.target_apex_m,
-            p.gravity_mps2,
-            p.l_m,
-        )?;
         let law = LawConstants {
             kappa: p.kappa,
             kappa_rate_s: p.kappa_rate_s,
             kappa_e_s2pm2: p.kappa_e_s2pm2,
-            target_energy_jpkg: feedback.target_energy_jpkg(),
-            compensation: feedback.compensation_factor(),
+            // eta* = G apex and eq. 22's (1 - e)/(1 + e), as [`EnergyFeedback`] computes
+            // them (the test `law_constants_are_the_energy_feedbacks` checks it to the bit);
+            // the parameters are validated above, so its checks are not repeated here
+            target_energy_jpkg: p.gravity_mps2 * p.target_apex_m,
+            compensation: (1.0 - p.restitution) / (1.0 + p.restitution),
             gravity_mps2: p.gravity_mps2,
             l_m: p.l_m,
             impact_height_m: p.impact_height_m,
@@ -1289,5 +1260,76 @@ impl crate::protocol::Wire for TiltControllerWith<sincos::BackendSinCos> {
     }
     fn command_of(command: &crate::protocol::Command) -> Option<TiltCommand> {
         <TiltController as crate::protocol::Wire>::command_of(command)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fields::{Count, Fields};
+    use super::*;
+    use crate::hop_control::{HopFrame, HopParams};
+
+    #[test]
+    fn law_constants_are_the_energy_feedbacks() {
+        for (e, g, apex) in [
+            (0.5f32, 9.81f32, 0.25f32),
+            (0.0, 9.80665, 1.3),
+            (1.0, 1.62, 0.3),
+        ] {
+            let p = TiltParams {
+                restitution: e,
+                gravity_mps2: g,
+                target_apex_m: apex,
+                ..TiltParams::default()
+            };
+            let c = TiltController::new(p).unwrap();
+            let f = EnergyFeedback::new(e, p.kappa_e_s2pm2, g * apex, g, p.l_m).unwrap();
+            assert_eq!(
+                c.law.compensation.to_bits(),
+                f.compensation_factor().to_bits()
+            );
+            assert_eq!(
+                c.law.target_energy_jpkg.to_bits(),
+                f.target_energy_jpkg().to_bits()
+            );
+        }
+    }
+
+    fn count<P: Fields + Copy>(p: P) -> usize {
+        let mut c = Count(0);
+        let mut p = p;
+        p.fields(&mut c);
+        c.0
+    }
+
+    /// The flat serde form lists every field once (COUNT is what the walk visits) and is
+    /// postcard's derived encoding: the bytes are the fields' own encodings in order.
+    #[test]
+    fn flat_forms_visit_every_field_and_round_trip_bit_for_bit() {
+        assert_eq!(count(TiltParams::default()), TiltParams::COUNT);
+        assert_eq!(count(TiltFrame::default()), TiltFrame::COUNT);
+        assert_eq!(count(HopParams::default()), HopParams::COUNT);
+        assert_eq!(count(HopFrame::default()), HopFrame::COUNT);
+        let mut p = TiltParams::default();
+        p.dt_s = f32::from_bits(0x7fc0_1234); // a NaN payload survives
+        p.estimator.memory_samples = 300;
+        p.stale_limit_steps = 40_000;
+        p.contact_iterations = 3;
+        let bytes = postcard::to_allocvec(&p).unwrap();
+        // 32 f32, the u16s 300 and 40000 as 2- and 3-byte varints, four u8
+        assert_eq!(bytes.len(), 32 * 4 + 2 + 3 + 4);
+        let back: TiltParams = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!(back.dt_s.to_bits(), p.dt_s.to_bits());
+        assert_eq!(postcard::to_allocvec(&back).unwrap(), bytes);
+        // a short message is an error, not a default
+        assert!(postcard::from_bytes::<TiltParams>(&bytes[..bytes.len() - 1]).is_err());
+        let f = TiltFrame {
+            seq: 7,
+            body_y_m: -0.5,
+            ..TiltFrame::default()
+        };
+        let bytes = postcard::to_allocvec(&f).unwrap();
+        assert_eq!(bytes.len(), 1 + 7 * 4);
+        assert_eq!(postcard::from_bytes::<TiltFrame>(&bytes).unwrap(), f);
     }
 }
