@@ -262,7 +262,8 @@ impl HopController {
     #[inline]
     pub fn new(params: HopParams) -> Result<Self, ParamError> {
         params.validate()?;
-        let law = params.thrust_law()?;
+        // validated above, thrust fields included
+        let law = params.law_of_checked()?;
         let g = params.gravity_mps2;
         let lag_m =
             params.touchdown_compression_m.max_r(0.0) + params.liftoff_compression_m.max_r(0.0);

@@ -201,7 +201,13 @@ impl HopParams {
         self.check_thrust(&mut c);
         c.non_negative("thrust_duration_s", self.thrust_duration_s);
         c.result()?;
-        // with the fields checked, the law's own checks pass
+        self.law_of_checked()
+    }
+
+    /// The law for parameters whose thrust fields have been checked (its own checks then
+    /// pass; they are not repeated by ours).
+    #[inline]
+    pub(crate) fn law_of_checked(&self) -> Result<EnergyServoThrust<f32>, ParamError> {
         let t = &self.thrust;
         EnergyServoThrust::new(
             t.nominal_thrust_mps2,
