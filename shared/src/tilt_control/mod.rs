@@ -90,7 +90,7 @@ use crate::math::Real;
 use crate::params::ParamError;
 use crate::protocol::{Fault, Mode, Telemetry};
 use crate::state::PaddleState;
-use crate::tilt::{EnergyFeedback, TiltLaw};
+use crate::tilt::TiltLaw;
 use axis::Axis;
 use checks::Checks;
 
@@ -783,7 +783,7 @@ impl<T: SinCos> TiltControllerWith<T> {
             kappa: p.kappa,
             kappa_rate_s: p.kappa_rate_s,
             kappa_e_s2pm2: p.kappa_e_s2pm2,
-            // eta* = G apex and eq. 22's (1 - e)/(1 + e), as [`EnergyFeedback`] computes
+            // eta* = G apex and eq. 22's (1 - e)/(1 + e), as [`crate::tilt::EnergyFeedback`] computes
             // them (the test `law_constants_are_the_energy_feedbacks` checks it to the bit);
             // the parameters are validated above, so its checks are not repeated here
             target_energy_jpkg: p.gravity_mps2 * p.target_apex_m,
@@ -1268,6 +1268,7 @@ mod tests {
     use super::fields::{Count, Fields};
     use super::*;
     use crate::hop_control::{HopFrame, HopParams};
+    use crate::tilt::EnergyFeedback;
 
     #[test]
     fn law_constants_are_the_energy_feedbacks() {
