@@ -170,6 +170,58 @@ fn energy_servo_with_a_noisy_sensor_in_hil_equals_sil_bit_for_bit() {
     );
 }
 
+// ---- the static bound -------------------------------------------------------------------
+
+/// The static worst case of a step function of `elf` (scripts/wcet.py --json):
+/// (instructions, Cortex-M4 cycles).
+fn static_worst_case(elf: &Path, symbol: &str) -> (u32, u32) {
+    let root = hil::workspace_root();
+    let out = std::process::Command::new("python3")
+        .arg(root.join("scripts/wcet.py"))
+        .arg(elf)
+        .arg(symbol)
+        .arg("--json")
+        .output()
+        .unwrap_or_else(|e| panic!("run python3 scripts/wcet.py (install Python 3): {e}"));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "scripts/wcet.py failed on {symbol}: {}{}",
+        text,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let field = |key: &str| -> u32 {
+        let at = text
+            .find(key)
+            .unwrap_or_else(|| panic!("no {key} in {text}"))
+            + key.len();
+        text[at..]
+            .trim_start_matches(|c: char| c == '"' || c == ':' || c == ' ')
+            .split(|c: char| !c.is_ascii_digit())
+            .next()
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{key} in {text}"))
+    };
+    (field("\"worst_instructions\""), field("\"worst_cycles\""))
+}
+
+/// The hopper step's budget holds for every accepted configuration: its compiled code has
+/// no loop and no call, so its longest path (scripts/wcet.py) bounds every step; within
+/// 300 less the 3 instructions of the HIL measurement window (scripts/test.sh's
+/// convention), and so is the safe command.
+#[test]
+fn the_hopper_step_is_within_its_budget_on_every_path() {
+    let elf = firmware();
+    let (step, cycles) = static_worst_case(&elf, "dexter_core::hop_control::HopController::step");
+    let (safe, _) = static_worst_case(&elf, "dexter_core::hop_control::HopController::safe");
+    eprintln!("hopper step: static worst case {step} instructions, {cycles} cycles; safe {safe}");
+    assert!(
+        step + 3 <= HOP_BUDGET,
+        "static worst case {step} + 3 > {HOP_BUDGET}"
+    );
+    assert!(safe + 3 <= HOP_BUDGET);
+}
+
 // ---- benchmark figures (BENCHMARKS.md, "Hopper controller on the MCU") -------------------
 
 /// Issue 12's accuracy-costs-time table, in HIL: for each control rate, Raibert's thrust on

@@ -157,6 +157,67 @@ fn realistic_triangle_in_hil_stays_upright_and_equals_sil_bit_for_bit() {
     );
 }
 
+// ---- the static bound -------------------------------------------------------------------
+
+/// The static worst case of a step function of the firmware image `elf` (scripts/wcet.py:
+/// the longest path through its compiled code, callees included; the function has no loop
+/// and no indirect call, so the bound holds for every input and every configuration the
+/// validator accepts): (instructions, Cortex-M4 cycles).
+fn static_worst_case(elf: &Path, symbol: &str) -> (u32, u32) {
+    let root = hil::workspace_root();
+    let out = std::process::Command::new("python3")
+        .arg(root.join("scripts/wcet.py"))
+        .arg(elf)
+        .arg(symbol)
+        .arg("--json")
+        .output()
+        .unwrap_or_else(|e| panic!("run python3 scripts/wcet.py (install Python 3): {e}"));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "scripts/wcet.py failed on {symbol}: {}{}",
+        text,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let field = |key: &str| -> u32 {
+        let at = text
+            .find(key)
+            .unwrap_or_else(|| panic!("no {key} in {text}"))
+            + key.len();
+        text[at..]
+            .trim_start_matches(|c: char| c == '"' || c == ':' || c == ' ')
+            .split(|c: char| !c.is_ascii_digit())
+            .next()
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{key} in {text}"))
+    };
+    (field("\"worst_instructions\""), field("\"worst_cycles\""))
+}
+
+/// The tilt step's instruction budget holds for every accepted configuration: the longest
+/// path through `TiltControllerWith<PolySinCos>::step` as compiled into the shipped image
+/// (with its callees: the estimator's periods, the sine/cosine, the axis commands) is
+/// within 600 less the 3 instructions the HIL measurement window adds around the call (the
+/// line juggler's convention, scripts/test.sh), and so is the safe command.
+#[test]
+fn the_tilt_step_is_within_its_budget_on_every_path() {
+    let elf = firmware();
+    let (step, cycles) = static_worst_case(
+        &elf,
+        "dexter_core::tilt_control::TiltControllerWith$LT$T$GT$::step",
+    );
+    let (safe, _) = static_worst_case(
+        &elf,
+        "dexter_core::tilt_control::TiltControllerWith$LT$T$GT$::safe",
+    );
+    eprintln!("tilt step: static worst case {step} instructions, {cycles} cycles; safe {safe}");
+    assert!(
+        step + 3 <= TILT_BUDGET,
+        "static worst case {step} + 3 > {TILT_BUDGET}"
+    );
+    assert!(safe + 3 <= TILT_BUDGET);
+}
+
 // ---- benchmark figures (BENCHMARKS.md, "Tilt controller on the MCU") ---------------------
 
 /// One row: a sine/cosine source on its firmware image and an iteration cap, over the
