@@ -196,7 +196,7 @@ fn static_worst_case(elf: &Path, symbol: &str) -> (u32, u32) {
             .unwrap_or_else(|| panic!("no {key} in {text}"))
             + key.len();
         text[at..]
-            .trim_start_matches(|c: char| c == '"' || c == ':' || c == ' ')
+            .trim_start_matches(['"', ':', ' '])
             .split(|c: char| !c.is_ascii_digit())
             .next()
             .and_then(|n| n.parse().ok())

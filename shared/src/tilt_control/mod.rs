@@ -1311,11 +1311,17 @@ mod tests {
         assert_eq!(count(TiltFrame::default()), TiltFrame::COUNT);
         assert_eq!(count(HopParams::default()), HopParams::COUNT);
         assert_eq!(count(HopFrame::default()), HopFrame::COUNT);
-        let mut p = TiltParams::default();
-        p.dt_s = f32::from_bits(0x7fc0_1234); // a NaN payload survives
-        p.estimator.memory_samples = 300;
-        p.stale_limit_steps = 40_000;
-        p.contact_iterations = 3;
+        let d = TiltParams::default();
+        let p = TiltParams {
+            dt_s: f32::from_bits(0x7fc0_1234), // a NaN payload survives
+            estimator: FlightTuning {
+                memory_samples: 300,
+                ..d.estimator
+            },
+            stale_limit_steps: 40_000,
+            contact_iterations: 3,
+            ..d
+        };
         let bytes = postcard::to_allocvec(&p).unwrap();
         // 32 f32, the u16s 300 and 40000 as 2- and 3-byte varints, four u8
         assert_eq!(bytes.len(), 32 * 4 + 2 + 3 + 4);
