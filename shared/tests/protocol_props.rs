@@ -26,7 +26,8 @@ fn fault() -> impl Strategy<Value = Fault> {
         Just(Fault::NonFinite),
         Just(Fault::OutOfRange),
         Just(Fault::Stale),
-        Just(Fault::LinkTimeout)
+        Just(Fault::LinkTimeout),
+        Just(Fault::Overrun)
     ]
 }
 

@@ -476,7 +476,10 @@ impl<A: Actuator, B: Actuator> Plant<A, B> {
                 th: [self.body.theta_rad, self.body.theta_dot_radps],
                 l: self.l,
             };
-            let found = gap.first_contact(h).map_err(|_| TableRunEnd::NoContact)?;
+            let found = gap.first_contact(h).map_err(|e| match e {
+                ContactError::NonFinite => TableRunEnd::NonFinite,
+                ContactError::Cap(_) => TableRunEnd::SearchCap,
+            })?;
             match found {
                 Some(c) if c.time_s <= h => {
                     self.advance(c.time_s, acc);

@@ -33,8 +33,11 @@ pub enum TableRunEnd {
     /// After an impact the contact point does not leave the table (no flight), or impacts
     /// pile up within one control period.
     NoSeparation,
-    /// The contact search failed (a cap, or no contact before the horizon).
+    /// No contact before the gap's horizon.
     NoContact,
+    /// The contact search hit one of its iteration caps (an internal limit: the run is
+    /// cut short, and says so).
+    SearchCap,
     /// Painlevé jam in a frictional impact.
     Jam,
     /// A state became non-finite.
@@ -50,6 +53,7 @@ impl From<RunEnd> for TableRunEnd {
             RunEnd::TippedOver => TableRunEnd::TippedOver,
             RunEnd::NoSeparation => TableRunEnd::NoSeparation,
             RunEnd::NoContact => TableRunEnd::NoContact,
+            RunEnd::SearchCap => TableRunEnd::SearchCap,
             RunEnd::Jam => TableRunEnd::Jam,
             RunEnd::NonFinite => TableRunEnd::NonFinite,
         }
