@@ -50,6 +50,17 @@ fn safe_as<C: Wire, T: StepTimer>(
     (C::command(command), instructions)
 }
 
+/// A controller of kind `C` from `params`, or the error naming the first invalid one.
+///
+/// Not inlined, and generic, so that each kind's constructor and validation (cold code,
+/// `#[inline]` in the core) are compiled here, once, with the firmware's size-optimised
+/// profile (`Cargo.toml`), rather than with the core's speed-optimised one or into every
+/// caller.
+#[inline(never)]
+fn configure_as<C: Wire>(params: &C::Params) -> Result<C, ParamError> {
+    C::new(*params)
+}
+
 /// `Hosted`: one variant per hosted controller, and its dispatch.
 macro_rules! hosted {
     ($($(#[$doc:meta])* $name:ident($controller:ty)),+ $(,)?) => {
@@ -68,7 +79,7 @@ macro_rules! hosted {
             /// kind, else the controller or the error naming its first invalid parameter.
             pub fn configure(config: &Config) -> Option<Result<Self, ParamError>> {
                 $(if let Some(params) = <$controller as Wire>::params_of(config) {
-                    return Some(<$controller as FixedRate>::new(*params).map(Hosted::$name));
+                    return Some(configure_as::<$controller>(params).map(Hosted::$name));
                 })+
                 None
             }
@@ -109,9 +120,25 @@ macro_rules! hosted {
     };
 }
 
+/// The tilt controller this image hosts: the shipped [`TiltController`] (polynomial sine and
+/// cosine), or with the feature `tilt-backend-sincos` (a measurement build, see
+/// firmware/Cargo.toml) the one with the math backend's (libm, or micromath with
+/// `fast-math`), to measure what accuracy costs on the target.
+///
+/// [`TiltController`]: dexter_core::tilt_control::TiltController
+#[cfg(not(feature = "tilt-backend-sincos"))]
+type HostedTilt = dexter_core::tilt_control::TiltController;
+#[cfg(feature = "tilt-backend-sincos")]
+type HostedTilt =
+    dexter_core::tilt_control::TiltControllerWith<dexter_core::tilt_control::sincos::BackendSinCos>;
+
 hosted! {
     /// The line juggler (mirror law, estimator, paddle tracker).
     Line(dexter_core::control::Controller),
     /// The link check (echoes a scaled value).
     Echo(dexter_core::echo::Echo),
+    /// The kappa-tilt table with energy feedback.
+    Tilt(HostedTilt),
+    /// The hopper's thrust valve.
+    Hop(dexter_core::hop_control::HopController),
 }

@@ -292,6 +292,10 @@ controller_kinds! {
     Line => crate::control::Controller,
     /// The link check: echoes a scaled value, no actuator ([`crate::echo::Echo`]).
     Echo => crate::echo::Echo,
+    /// The kappa-tilt table with energy feedback ([`crate::tilt_control::TiltController`]).
+    Tilt => crate::tilt_control::TiltController,
+    /// The hopper's thrust valve ([`crate::hop_control::HopController`]).
+    Hop => crate::hop_control::HopController,
 }
 
 /// A message from the plant side (host) to the controller (firmware).
@@ -692,6 +696,6 @@ mod tests {
         let config = Config::default_for(Kind::Line);
         assert!(<Controller as Wire>::params_of(&config).is_some());
         assert!(<Echo as Wire>::params_of(&config).is_none());
-        assert_eq!(Kind::ALL, &[Kind::Line, Kind::Echo]);
+        assert_eq!(Kind::ALL, &[Kind::Line, Kind::Echo, Kind::Tilt, Kind::Hop]);
     }
 }

@@ -26,11 +26,14 @@
 //! period doubling. [`params::HopperParams`] is the scene's `[hopper]` table.
 
 pub mod analysis;
+pub mod eq17;
 pub mod full;
 pub mod integrate;
 pub mod linear;
 pub mod nonlinear;
 pub mod params;
+pub mod sampled;
+pub mod valve;
 
 pub use full::FullNonlinear;
 pub use integrate::Integrator;

@@ -57,12 +57,15 @@
 //! eigenvalue solver), [`juggler`] (the planar juggler).
 
 pub mod analysis;
+pub mod camera;
 pub mod contact;
 pub mod eigen;
 pub mod impact;
 pub mod juggler;
 pub mod params;
+pub mod real_table;
 pub mod stats;
+pub mod table_run;
 
 pub use params::PlanarParams;
 
