@@ -5,8 +5,8 @@
 //!   the frame the controller got (green: noise, quantization, latency) and, in blue, the
 //!   true compression while the commanded valve is open (the thrust, broken where it is
 //!   closed);
-//! - `{scene}-timeline-phase`: the true phase (red) and the phase the controller detected
-//!   (green) as levels 0 flight, 1 compression, 2 thrust, 3 decompression, and the valve
+//! - `{scene}-timeline-phase`: the true phase (red: the exactly timed law's, thrust for
+//!   delta from the true bottom) and the phase the controller detected (green) as levels 0 flight, 1 compression, 2 thrust, 3 decompression, and the valve
 //!   command (blue) as -1 closed, -0.5 open.
 //!
 //! The timeline is at most `timeline_cycles` hops of control steps (bounded by
@@ -130,9 +130,9 @@ fn phase_chart(rows: &[TimelineRow], hops: &str) -> Chart {
             .map(|r| (r.time_s, if r.valve_open { open } else { closed })),
     );
     Chart::new(
-        format!("Phases, {hops}"),
+        format!("Phases (0 flight, 1 compression, 2 thrust, 3 decompression), {hops}"),
         "time, s",
-        "phase: 0 flight, 1 compression, 2 thrust, 3 decompression; valve -1 closed, -0.5 open",
+        "phase level; valve -1 closed, -0.5 open",
     )
     .line("true phase", truth)
     .line("detected phase", detected)
