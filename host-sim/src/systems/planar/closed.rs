@@ -118,7 +118,7 @@ impl RealFigures {
             ms(self.impact_time_error_max_s),
             self.max_abs_x_m
         );
-        let _ = writeln!(o, "  control:      {} steps", self.control_steps);
+        let _ = writeln!(o, "  steps:        {} control steps", self.control_steps);
         o += &self.safe.text();
         if let (Some(lo), Some(mean), Some(hi)) = (
             self.hil.step_instructions_min,

@@ -89,7 +89,10 @@ fn apex_frame(steps: &[&StepSample], r: &TableImpact, after_s: f64, l_m: f64) ->
         .filter(|s| s.time_s > after_s && s.time_s < r.time_s)
         .max_by(|a, b| a.body[1].total_cmp(&b.body[1]))?;
     Some(Frame {
-        label: format!("apex before impact {}, t = {:.3} s", r.index, s.time_s),
+        label: match r.index {
+            0 => format!("drop, t {:.3} s", s.time_s),
+            _ => format!("apex, t {:.3} s", s.time_s),
+        },
         shapes: shapes(s.body, l_m, (0.0, s.table_height_m), s.table_angle_rad),
     })
 }
@@ -100,10 +103,7 @@ fn impact_frame(r: &TableImpact, l_m: f64) -> Frame {
     let pose = [b.x_m, b.y_m, b.theta_rad];
     let contact = b.contact_point(l_m);
     Frame {
-        label: format!(
-            "impact {}, t = {:.3} s, theta {:+.3} rad",
-            r.index, r.time_s, b.theta_rad
-        ),
+        label: format!("impact {}, t {:.3} s", r.index, r.time_s),
         shapes: shapes(pose, l_m, (contact[0] - b.x_m, contact[1]), r.table_angle_rad),
     }
 }

@@ -71,7 +71,7 @@ impl Plots<PlanarSystem> for PlanarPlots {
         };
         let mut written = Vec::new();
         if let Some(film) = &out.film {
-            let title = sub("body and table around the first and the last impacts");
+            let title = format!("{name}: body and table, first and last impacts");
             let files = film
                 .write(&title, m.l_m(), dir, name)
                 .map_err(|e| Failure::run(format!("plot: {e}")))?;
