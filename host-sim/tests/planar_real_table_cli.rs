@@ -31,14 +31,20 @@ fn assert_balanced(v: &Value) {
     assert_eq!(v["tipped_over"], false, "{v}");
     assert_eq!(v["end"], "completed", "{v}");
     let mean = num(v, "late_mean_energy_jpkg");
-    assert!((num(v, "target_energy_jpkg") - ETA_STAR).abs() < 1e-12, "{v}");
+    assert!(
+        (num(v, "target_energy_jpkg") - ETA_STAR).abs() < 1e-12,
+        "{v}"
+    );
     let err = (mean - ETA_STAR) / ETA_STAR;
     assert!(err.abs() < 0.02, "late energy {err:+.4} of eta*");
     assert!((num(v, "late_energy_error") - err).abs() < 1e-12, "{v}");
     // upright: far from the tip angle atan 4 = 1.33 rad late in the run
     assert!(num(v, "late_theta_max_rad") < 0.2, "{v}");
     assert_eq!(v["safe_steps"], 0, "{v}");
-    assert_eq!(num(v, "control_steps"), v["control_steps"].as_f64().unwrap());
+    assert_eq!(
+        num(v, "control_steps"),
+        v["control_steps"].as_f64().unwrap()
+    );
     for k in [
         "step_instructions_min",
         "step_instructions_mean",
@@ -69,7 +75,11 @@ fn the_same_triangle_at_one_kilohertz_and_with_ideal_drives_stays_upright() {
         ],
         ["real_table.drives=\"ideal\"", "planar.seed=7"],
     ] {
-        let mut args = vec!["run".to_string(), scene("planar-triangle-sil"), "--json".into()];
+        let mut args = vec![
+            "run".to_string(),
+            scene("planar-triangle-sil"),
+            "--json".into(),
+        ];
         for s in sets {
             args.extend(["--set".to_string(), s.to_string()]);
         }
@@ -109,7 +119,12 @@ fn over_twenty_seeds_the_real_table_keeps_at_least_as_many_upright_as_the_ideal_
     }
     // docs/planar.md: the ideal table with 10 ms timing noise keeps 16 of 20
     assert_eq!(counts[0], 16, "ideal");
-    assert!(counts[1] >= counts[0], "real {} < ideal {}", counts[1], counts[0]);
+    assert!(
+        counts[1] >= counts[0],
+        "real {} < ideal {}",
+        counts[1],
+        counts[0]
+    );
 }
 
 #[test]
@@ -126,7 +141,10 @@ fn plot_writes_the_filmstrip_of_body_and_table() {
     let err = String::from_utf8_lossy(&out.stderr);
     for ext in ["svg", "png"] {
         let f = dir.join(format!("planar-triangle-sil-filmstrip.{ext}"));
-        assert!(f.metadata().map(|m| m.len() > 1000).unwrap_or(false), "{err}");
+        assert!(
+            f.metadata().map(|m| m.len() > 1000).unwrap_or(false),
+            "{err}"
+        );
     }
     let svg = std::fs::read_to_string(dir.join("planar-triangle-sil-filmstrip.svg")).unwrap();
     // 4 first impacts and the last ones, with the flights' apexes: 15 panels
@@ -139,10 +157,19 @@ fn bad_real_table_keys_exit_2_naming_the_key() {
     let s = scene("planar-triangle-sil");
     for (set, key) in [
         ("real_table.camera.noise_m=-1", "real_table.camera.noise_m"),
-        ("real_table.control_rate_hz=20", "real_table.control_rate_hz"),
+        (
+            "real_table.control_rate_hz=20",
+            "real_table.control_rate_hz",
+        ),
         ("real_table.tilt.max_rad=-0.8", "real_table.tilt.max_rad"),
-        ("real_table.stroke.accel_max_mps2=0", "real_table.stroke.accel_max_mps2"),
-        ("real_table.contact_iterations=9", "real_table.contact_iterations"),
+        (
+            "real_table.stroke.accel_max_mps2=0",
+            "real_table.stroke.accel_max_mps2",
+        ),
+        (
+            "real_table.contact_iterations=9",
+            "real_table.contact_iterations",
+        ),
         ("real_table.max_duration_s=1e9", "real_table.max_duration_s"),
         ("real_table.drives=\"fast\"", "real_table.drives"),
         ("real_table.camera.gain=2", "gain"),

@@ -626,9 +626,9 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
             end = TableRunEnd::Completed;
         }
         self.counters.sim_time_s = self.plant.time_s;
-        let summary =
-            self.summary
-                .finish(TableKind::Real, &self.cfg.model, end, &self.counters);
+        let summary = self
+            .summary
+            .finish(TableKind::Real, &self.cfg.model, end, &self.counters);
         Ok(TableRun {
             summary,
             impacts: Vec::new(),
@@ -689,8 +689,7 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
         }
         let planning = cmd.mode == Mode::Track
             && !matches!(cmd.plan, PlanStatus::Idle | PlanStatus::Unreachable);
-        let seen_last =
-            self.last_impact_s.unwrap_or(0.0) + self.camera.latency_s() + 2.0 * dt;
+        let seen_last = self.last_impact_s.unwrap_or(0.0) + self.camera.latency_s() + 2.0 * dt;
         if planning && t_k > seen_last {
             self.prediction = Some(t_k + f64::from(cmd.impact_in_s));
         }
@@ -722,7 +721,8 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
             let target = ts.min(t_next);
             let index = self.summary.impacts();
             let prediction = &mut self.prediction;
-            let (summary, sink, last) = (&mut self.summary, &mut *self.sink, &mut self.last_impact_s);
+            let (summary, sink, last) =
+                (&mut self.summary, &mut *self.sink, &mut self.last_impact_s);
             self.plant
                 .advance_to(target, index, self.cfg.impacts, &mut |mut rec| {
                     rec.predicted_time_s = prediction.take();

@@ -104,7 +104,12 @@ fn impact_frame(r: &TableImpact, l_m: f64) -> Frame {
     let contact = b.contact_point(l_m);
     Frame {
         label: format!("impact {}, t {:.3} s", r.index, r.time_s),
-        shapes: shapes(pose, l_m, (contact[0] - b.x_m, contact[1]), r.table_angle_rad),
+        shapes: shapes(
+            pose,
+            l_m,
+            (contact[0] - b.x_m, contact[1]),
+            r.table_angle_rad,
+        ),
     }
 }
 
@@ -145,7 +150,13 @@ impl FilmKeeper {
     }
 
     /// Draw the filmstrip `{dir}/{stem}-filmstrip` (SVG and PNG).
-    pub fn write(&self, title: &str, l_m: f64, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, String> {
+    pub fn write(
+        &self,
+        title: &str,
+        l_m: f64,
+        dir: &Path,
+        stem: &str,
+    ) -> Result<Vec<PathBuf>, String> {
         let frames = self.frames(l_m);
         filmstrip(title, &frames, dir, &format!("{stem}-filmstrip")).map_err(|e| e.to_string())
     }

@@ -191,7 +191,13 @@ impl TiltDrive {
         check("real_table.tilt.min_rad", self.min_rad, -1.2, 1.2, false)?;
         check("real_table.tilt.max_rad", self.max_rad, -1.2, 1.2, false)?;
         ordered("real_table.tilt.max_rad", self.min_rad, self.max_rad)?;
-        check("real_table.tilt.rate_max_radps", self.rate_max_radps, 0.0, 1e3, true)?;
+        check(
+            "real_table.tilt.rate_max_radps",
+            self.rate_max_radps,
+            0.0,
+            1e3,
+            true,
+        )?;
         let a = self.accel_max_radps2;
         check("real_table.tilt.accel_max_radps2", a, 0.0, 1e5, true)?;
         Ok(DriveLimits {
@@ -233,7 +239,13 @@ impl CameraTable {
         check(&k("noise_rad"), self.noise_rad, 0.0, 1.0, false)?;
         check(&k("latency_s"), self.latency_s, 0.0, MAX_LATENCY_S, false)?;
         check(&k("quantization_m"), self.quantization_m, 0.0, 1.0, false)?;
-        check(&k("quantization_rad"), self.quantization_rad, 0.0, 1.0, false)?;
+        check(
+            &k("quantization_rad"),
+            self.quantization_rad,
+            0.0,
+            1.0,
+            false,
+        )?;
         Ok(Some(CameraConfig {
             rate_hz: self.rate_hz,
             noise_m: self.noise_m,
@@ -275,14 +287,26 @@ impl RealTableScene {
             MAX_CONTROL_RATE_HZ,
             false,
         )?;
-        check("real_table.kappa_rate_s", self.kappa_rate_s, 0.0, 0.1, false)?;
+        check(
+            "real_table.kappa_rate_s",
+            self.kappa_rate_s,
+            0.0,
+            0.1,
+            false,
+        )?;
         if !(1..=4).contains(&self.contact_iterations) {
             return Err(SceneError::new(
                 "real_table.contact_iterations",
                 format!("must be in 1..=4, got {}", self.contact_iterations),
             ));
         }
-        check("real_table.max_duration_s", self.max_duration_s, 0.0, MAX_DURATION_S, true)?;
+        check(
+            "real_table.max_duration_s",
+            self.max_duration_s,
+            0.0,
+            MAX_DURATION_S,
+            true,
+        )?;
         let (tilt, stroke) = (self.tilt.limits()?, self.stroke.limits()?);
         let camera = self.camera.config(p.seed)?;
         let base = self.controller_base(&tilt, &stroke);
