@@ -174,7 +174,7 @@ impl TableSink for Streams<'_> {
         if let Some(f) = self.film.as_mut() {
             f.impact(r);
         }
-        if r.index % PROGRESS_EVERY == 0 {
+        if r.index.is_multiple_of(PROGRESS_EVERY) {
             self.bar.update([r.index as f64]);
         }
     }
