@@ -137,7 +137,7 @@ fn frames_of<'a>(
 }
 
 impl FilmKeeper {
-    /// The panels: the first [`SHOWN`] impacts, then the last ones not among them.
+    /// The panels: the first `SHOWN` impacts, then the last ones not among them.
     pub fn frames(&self, l_m: f64) -> Vec<Frame> {
         let first: Vec<&StepSample> = self.first_steps.iter().collect();
         let mut out = frames_of(self.first_impacts.iter(), &first, l_m);
