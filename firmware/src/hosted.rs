@@ -114,4 +114,6 @@ hosted! {
     Line(dexter_core::control::Controller),
     /// The link check (echoes a scaled value).
     Echo(dexter_core::echo::Echo),
+    /// The one-joint arm (B-spline trajectory tracker with inverse dynamics).
+    Arm(dexter_core::arm_control::ArmController),
 }

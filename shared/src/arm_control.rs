@@ -137,16 +137,18 @@ impl Default for ArmParams {
 }
 
 impl ArmParams {
-    /// Check every field; the error names the first bad one.
+    /// Check every field; the error names the first bad one. Cold code, kept out of line
+    /// (it runs once per `Configure`).
+    #[inline(never)]
     pub fn validate(&self) -> Result<(), ParamError> {
         positive("dt_s", self.dt_s)?;
-        let l = &self.limits;
-        Tracker::new(self.kp_per_s2, self.kd_per_s, l.tracker_limits(), self.dt_s)
-            .map_err(rename_limit)?;
-        positive("limits.torque_max_nm", l.torque_max_nm)?;
+        non_negative("kp_per_s2", self.kp_per_s2)?;
+        non_negative("kd_per_s", self.kd_per_s)?;
+        self.limits.validate()?;
         positive("inertia_kgm2", self.inertia_kgm2)?;
         non_negative("gravity_torque_nm", self.gravity_torque_nm)?;
         finite("gravity_phase_rad", self.gravity_phase_rad)?;
+        let l = &self.limits;
         if self.inertia_kgm2 * l.accel_max_radps2 + self.gravity_torque_nm > l.torque_max_nm {
             return Err(ParamError::OutOfRange("limits.accel_max_radps2"));
         }
@@ -189,20 +191,19 @@ impl ArmParams {
     }
 }
 
-/// The tracker names its limits as a paddle's; give them the joint's names.
-fn rename_limit(e: ParamError) -> ParamError {
-    let rename = |p: &'static str| match p {
-        "limits.min_height_m" => "limits.min_angle_rad",
-        "limits.max_height_m" => "limits.max_angle_rad",
-        "limits.velocity_max_mps" => "limits.velocity_max_radps",
-        "limits.accel_max_mps2" => "limits.accel_max_radps2",
-        other => other,
-    };
-    match e {
-        ParamError::NotFinite(p) => ParamError::NotFinite(rename(p)),
-        ParamError::NotPositive(p) => ParamError::NotPositive(rename(p)),
-        ParamError::Negative(p) => ParamError::Negative(rename(p)),
-        ParamError::OutOfRange(p) => ParamError::OutOfRange(rename(p)),
+impl JointLimits {
+    /// Check every field with the joint's names, so that the tracker built from them
+    /// ([`Tracker::new`], which names a paddle's limits) cannot reject them.
+    fn validate(&self) -> Result<(), ParamError> {
+        finite("limits.min_angle_rad", self.min_angle_rad)?;
+        finite("limits.max_angle_rad", self.max_angle_rad)?;
+        if self.max_angle_rad <= self.min_angle_rad {
+            return Err(ParamError::OutOfRange("limits.max_angle_rad"));
+        }
+        positive("limits.velocity_max_radps", self.velocity_max_radps)?;
+        positive("limits.accel_max_radps2", self.accel_max_radps2)?;
+        positive("limits.torque_max_nm", self.torque_max_nm)?;
+        Ok(())
     }
 }
 
@@ -278,6 +279,7 @@ pub struct ArmController {
 
 impl ArmController {
     /// A controller; the error names the first invalid parameter.
+    #[inline(never)]
     pub fn new(params: ArmParams) -> Result<Self, ParamError> {
         params.validate()?;
         let tracker = Tracker::new(
@@ -321,7 +323,8 @@ impl ArmController {
     }
 
     /// Torque for acceleration `accel_radps2` at angle `angle_rad` (inverse dynamics),
-    /// clamped to `±torque_max_nm`.
+    /// clamped to `±torque_max_nm`. Out of line: `step` and `safe` share one copy.
+    #[inline(never)]
     pub fn torque_for(&self, accel_radps2: f32, angle_rad: f32) -> f32 {
         let p = &self.params;
         let tau = p.inertia_kgm2 * accel_radps2
@@ -340,7 +343,9 @@ impl ArmController {
         self.fault
     }
 
-    /// One control period: the command for `frame`.
+    /// One control period: the command for `frame`. Out of line, so the firmware has one
+    /// symbol for the static worst-case tool (`scripts/wcet.py`).
+    #[inline(never)]
     pub fn step(&mut self, frame: &ArmFrame) -> ArmCommand {
         if self.fault != Fault::None {
             return self.safe(frame.seq, self.fault);

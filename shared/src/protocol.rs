@@ -292,6 +292,8 @@ controller_kinds! {
     Line => crate::control::Controller,
     /// The link check: echoes a scaled value, no actuator ([`crate::echo::Echo`]).
     Echo => crate::echo::Echo,
+    /// The one-joint arm: a planned B-spline tracked with torque limits ([`crate::arm_control::ArmController`]).
+    Arm => crate::arm_control::ArmController,
 }
 
 /// A message from the plant side (host) to the controller (firmware).

@@ -15,7 +15,7 @@ use super::contact::Joint;
 use super::motion::ArmMotion;
 use super::planner::Plan;
 use super::simulate::{execute, Executed, GoalError};
-use super::{ArmError, ArmSystem};
+use super::{ArmError, ArmScene};
 use crate::controller::{Sil, StepController};
 use dexter_core::arm_control::{ArmController, ArmFrame};
 use dexter_core::protocol::{Fault, Mode};
@@ -141,7 +141,7 @@ pub struct TrackingReport {
 /// Close the loop: the controller `ctl` (SIL or HIL) tracks the plan on the joint plant
 /// for the whole motion and `hold_s` after.
 pub fn track(
-    sys: &ArmSystem,
+    sys: &ArmScene,
     ctl: &mut dyn StepController<ArmController>,
     plan: &Plan,
 ) -> Result<(TrackedMotion, TrackingReport), ArmError> {
@@ -217,7 +217,7 @@ pub fn track(
 
 /// [`track`] with the core linked in (SIL).
 pub fn track_sil(
-    sys: &ArmSystem,
+    sys: &ArmScene,
     plan: &Plan,
 ) -> Result<(TrackedMotion, TrackingReport), ArmError> {
     let params = sys.controller_params(&plan.points_rad, plan.segment_s)?;

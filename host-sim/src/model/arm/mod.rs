@@ -174,7 +174,7 @@ pub struct TrackingSettings {
 
 /// A validated arm scene: robot, object, task and settings.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ArmSystem {
+pub struct ArmScene {
     /// The object on its surface, and gravity.
     pub rig: Rig,
     /// The arm's own dynamics.
@@ -193,7 +193,7 @@ pub struct ArmSystem {
     pub tracking: TrackingSettings,
 }
 
-impl ArmSystem {
+impl ArmScene {
     /// Inertia (kg m^2) and gravity torque amplitude (N m) and phase (rad) of the arm with
     /// the object as a rigid payload at its starting place: what the controller's
     /// inverse dynamics assumes.

@@ -9,7 +9,7 @@
 use super::contact::{ArmInertia, Placement, Rig};
 use super::geometry::{Polygon, Surface, V2};
 use super::task::{Goal, Task, TaskKind};
-use super::{ArmError, ArmSystem, JointBounds, PlannerSettings, Solver, TrackingSettings};
+use super::{ArmError, ArmScene, JointBounds, PlannerSettings, Solver, TrackingSettings};
 use dexter_core::bspline::MAX_KNOTS;
 use dexter_core::params::{finite, non_negative, positive, ParamError};
 use serde::{Deserialize, Serialize};
@@ -280,7 +280,7 @@ impl ArmConfig {
     }
 
     /// The validated system; errors name the key at fault.
-    pub fn validate(&self) -> Result<ArmSystem, ArmError> {
+    pub fn validate(&self) -> Result<ArmScene, ArmError> {
         let (arm, bounds, g) = self.arm.validate()?;
         let (rig, start) = self.object.validate(&self.arm, g)?;
         let task = self.task.validate(&bounds)?;
@@ -294,7 +294,7 @@ impl ArmConfig {
                 "the contact edge lies on the surface",
             ));
         }
-        let system = ArmSystem {
+        let system = ArmScene {
             rig,
             arm,
             mass_kg: self.object.mass_kg,

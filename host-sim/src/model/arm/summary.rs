@@ -14,7 +14,7 @@ use super::motion::ArmMotion;
 use super::planner::evaluate::PlanSample;
 use super::planner::{plan, PhaseSpan, Plan};
 use super::simulate::{execute, Event, Executed, Execution, Frame, FrictionSample, GoalError};
-use super::{ArmError, ArmSystem, Solver};
+use super::{ArmError, ArmScene, Solver};
 use serde::Serialize;
 
 /// Factor of the margin check (issue 15: "mu 5 % below the plan's value").
@@ -113,7 +113,7 @@ pub struct RunOptions {
 }
 
 /// Plan, verify at mu and at 0.95 mu, optionally track; the summary.
-pub fn run(sys: &ArmSystem, opt: RunOptions) -> Result<ArmSummary, ArmError> {
+pub fn run(sys: &ArmScene, opt: RunOptions) -> Result<ArmSummary, ArmError> {
     let p = plan(sys)?;
     let motion = p.motion(sys.bounds.brake_accel_radps2);
     let ok = execute(sys, &motion, p.mu);
@@ -127,7 +127,7 @@ pub fn run(sys: &ArmSystem, opt: RunOptions) -> Result<ArmSummary, ArmError> {
 }
 
 fn summarize(
-    sys: &ArmSystem,
+    sys: &ArmScene,
     p: &Plan,
     motion: &dyn ArmMotion,
     ok: Execution,
@@ -184,7 +184,7 @@ fn summarize(
 
 /// The link as a rectangle from the joint axis to its tip (top surface at the given
 /// half thickness), and the palm as a segment from the tip, in the arm frame.
-fn arm_outline(sys: &ArmSystem) -> Vec<V2> {
+fn arm_outline(sys: &ArmScene) -> Vec<V2> {
     let s = &sys.rig.surface;
     let h = s.origin.y;
     let (l, palm) = if s.beta_rad == 0.0 {

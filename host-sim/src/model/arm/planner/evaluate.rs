@@ -22,7 +22,7 @@ use super::super::geometry::V2;
 use super::super::motion::{ArmMotion, PlannedMotion};
 use super::super::ode::rk4_step;
 use super::super::task::Phase;
-use super::super::ArmSystem;
+use super::super::ArmScene;
 use super::layout::{Design, Layout};
 use serde::Serialize;
 
@@ -111,7 +111,7 @@ impl Sink {
 /// The program for one system.
 pub struct Problem<'a> {
     /// The system.
-    pub sys: &'a ArmSystem,
+    pub sys: &'a ArmScene,
     /// Its design-vector layout.
     pub layout: Layout,
     /// Extra grasp samples per phase, as fractions of the phase's duration in (0, 1):
@@ -125,7 +125,7 @@ type Torques = Vec<(f64, f64)>;
 
 impl<'a> Problem<'a> {
     /// The program of a system's task.
-    pub fn new(sys: &'a ArmSystem) -> Self {
+    pub fn new(sys: &'a ArmScene) -> Self {
         let layout = Layout::new(sys);
         Self {
             extra: vec![Vec::new(); layout.phases.len()],

@@ -22,7 +22,7 @@ use super::contact::{BodyState, Placement};
 use super::geometry::V2;
 use super::motion::ArmMotion;
 use super::task::Phase;
-use super::ArmSystem;
+use super::ArmScene;
 use serde::Serialize;
 
 /// Integration step of the verifier, s.
@@ -149,13 +149,13 @@ enum State {
 
 /// Run `motion` against the object with friction coefficient `mu` (0.1 ms steps,
 /// frames and friction recorded).
-pub fn execute(sys: &ArmSystem, motion: &dyn ArmMotion, mu: f64) -> Execution {
+pub fn execute(sys: &ArmScene, motion: &dyn ArmMotion, mu: f64) -> Execution {
     execute_with(sys, motion, mu, SimOptions::default())
 }
 
 /// [`execute`] with a chosen step and recording.
 pub fn execute_with(
-    sys: &ArmSystem,
+    sys: &ArmScene,
     motion: &dyn ArmMotion,
     mu: f64,
     opt: SimOptions,
@@ -166,7 +166,7 @@ pub fn execute_with(
 }
 
 struct Runner<'a> {
-    sys: &'a ArmSystem,
+    sys: &'a ArmScene,
     arm: &'a dyn ArmMotion,
     mu: f64,
     state: State,
@@ -181,7 +181,7 @@ struct Runner<'a> {
 }
 
 impl<'a> Runner<'a> {
-    fn new(sys: &'a ArmSystem, arm: &'a dyn ArmMotion, mu: f64, opt: SimOptions) -> Self {
+    fn new(sys: &'a ArmScene, arm: &'a dyn ArmMotion, mu: f64, opt: SimOptions) -> Self {
         let mut breaks = arm.breaks_s();
         breaks.sort_by(f64::total_cmp);
         let s0 = sys.rig.grasped_state(&sys.start, &arm.joint(0.0));
