@@ -694,6 +694,6 @@ mod tests {
         let config = Config::default_for(Kind::Line);
         assert!(<Controller as Wire>::params_of(&config).is_some());
         assert!(<Echo as Wire>::params_of(&config).is_none());
-        assert_eq!(Kind::ALL, &[Kind::Line, Kind::Echo]);
+        assert_eq!(Kind::ALL, &[Kind::Line, Kind::Echo, Kind::Arm]);
     }
 }

@@ -215,13 +215,14 @@ pub fn track(
     Ok((m, report))
 }
 
-/// [`track`] with the core linked in (SIL).
-pub fn track_sil(
-    sys: &ArmScene,
-    plan: &Plan,
-) -> Result<(TrackedMotion, TrackingReport), ArmError> {
+/// The core's controller linked in (SIL), configured for `plan`.
+pub fn sil_controller(sys: &ArmScene, plan: &Plan) -> Result<Sil<ArmController>, ArmError> {
     let params = sys.controller_params(&plan.points_rad, plan.segment_s)?;
-    let mut sil = Sil::<ArmController>::new(params)
-        .map_err(|e| ArmError::NoPlan(format!("controller: {e}")))?;
+    Sil::<ArmController>::new(params).map_err(|e| ArmError::NoPlan(format!("controller: {e}")))
+}
+
+/// [`track`] with the core linked in (SIL).
+pub fn track_sil(sys: &ArmScene, plan: &Plan) -> Result<(TrackedMotion, TrackingReport), ArmError> {
+    let mut sil = sil_controller(sys, plan)?;
     track(sys, &mut sil, plan)
 }

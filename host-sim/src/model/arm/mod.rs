@@ -155,6 +155,9 @@ pub struct PlannerSettings {
     pub normal_force_min_mps2: f64,
     /// Initial guesses tried.
     pub starts: usize,
+    /// Largest joint acceleration the plan may ask for, rad/s^2: the tracker's limit
+    /// `tracking.accel_max_radps2` less the `planner.accel_margin` left to its feedback.
+    pub accel_max_radps2: f64,
 }
 
 /// Validated closed-loop settings (see [`params::TrackingTable`]).
