@@ -137,18 +137,25 @@ impl Default for ArmParams {
 }
 
 impl ArmParams {
-    /// Check every field; the error names the first bad one. Cold code, kept out of line
-    /// (it runs once per `Configure`).
-    #[inline(never)]
+    /// Check every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ParamError> {
+        self.tracker().map(|_| ())
+    }
+
+    /// Validate, and the tracker of these gains and limits: one copy of the checks for
+    /// [`validate`](Self::validate) and [`ArmController::new`] (cold code, kept out of
+    /// line: it runs once per `Configure`). The joint's limits are checked first under
+    /// their own names, so [`Tracker::new`] (which names a paddle's) only ever rejects the
+    /// gains (`tracking.kp_per_s2`, `tracking.kd_per_s`).
+    #[inline(never)]
+    fn tracker(&self) -> Result<Tracker, ParamError> {
         positive("dt_s", self.dt_s)?;
-        non_negative("kp_per_s2", self.kp_per_s2)?;
-        non_negative("kd_per_s", self.kd_per_s)?;
         self.limits.validate()?;
+        let l = &self.limits;
+        let tracker = Tracker::new(self.kp_per_s2, self.kd_per_s, l.tracker_limits(), self.dt_s)?;
         positive("inertia_kgm2", self.inertia_kgm2)?;
         non_negative("gravity_torque_nm", self.gravity_torque_nm)?;
         finite("gravity_phase_rad", self.gravity_phase_rad)?;
-        let l = &self.limits;
         if self.inertia_kgm2 * l.accel_max_radps2 + self.gravity_torque_nm > l.torque_max_nm {
             return Err(ParamError::OutOfRange("limits.accel_max_radps2"));
         }
@@ -161,7 +168,8 @@ impl ArmParams {
             return Err(ParamError::NotPositive("stale_limit_steps"));
         }
         self.trajectory.validate()?;
-        self.validate_trajectory_limits()
+        self.validate_trajectory_limits()?;
+        Ok(tracker)
     }
 
     /// The whole reference stays within the joint limits (B-spline convex hull: every
@@ -281,13 +289,7 @@ impl ArmController {
     /// A controller; the error names the first invalid parameter.
     #[inline(never)]
     pub fn new(params: ArmParams) -> Result<Self, ParamError> {
-        params.validate()?;
-        let tracker = Tracker::new(
-            params.kp_per_s2,
-            params.kd_per_s,
-            params.limits.tracker_limits(),
-            params.dt_s,
-        )?;
+        let tracker = params.tracker()?;
         let start = params.trajectory.sample(0.0).unwrap_or_default();
         Ok(Self {
             params,
