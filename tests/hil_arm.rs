@@ -28,9 +28,11 @@ use std::time::Duration;
 /// The arm controller's own budget.
 const BUDGET: u32 = <ArmController as FixedRate>::STEP_INSTRUCTION_BUDGET;
 
+/// The arm image (`--no-default-features --features arm`: line, echo and arm; the default
+/// image hosts the tilt table and the hopper instead, firmware/README.md, "Images").
 fn firmware() -> PathBuf {
     static ELF: OnceLock<Result<PathBuf, String>> = OnceLock::new();
-    ELF.get_or_init(|| hil::build_firmware().map_err(|e| e.to_string()))
+    ELF.get_or_init(|| hil::build_firmware_image("arm", &["arm"]).map_err(|e| e.to_string()))
         .clone()
         .unwrap_or_else(|e| panic!("HIL tests need the firmware: {e}"))
 }
@@ -111,4 +113,27 @@ fn a_corrupted_frame_latches_the_safe_state_on_target_and_shadow_alike() {
     let fault = hil.fault.expect("the controller went to its safe state");
     assert!(fault.starts_with("LinkTimeout"), "{fault}");
     assert!(hil.max_torque_nm <= scene.bounds.torque_max_nm);
+}
+
+/// The default image (line, echo, tilt, hop) leaves the arm's parameters undecoded and
+/// names the kind it does not host; the arm image does the same for the tilt table.
+#[test]
+fn each_image_refuses_a_kind_it_does_not_host_naming_it() {
+    let (scene, p) = planned(examples::THROW);
+    let params = scene.controller_params(&p.points_rad, p.segment_s).unwrap();
+    let default = HilOptions {
+        firmware_elf: hil::build_firmware().expect("the default image builds"),
+        ..options(0.0)
+    };
+    let err = LockStep::<ArmController>::start(params, default)
+        .err()
+        .expect("the default image does not host the arm")
+        .to_string();
+    assert!(err.contains("does not host the Arm controller"), "{err}");
+    let tilt = dexter_core::tilt_control::TiltParams::default();
+    let err = LockStep::<dexter_core::tilt_control::TiltController>::start(tilt, options(0.0))
+        .err()
+        .expect("the arm image does not host the tilt table")
+        .to_string();
+    assert!(err.contains("does not host the Tilt controller"), "{err}");
 }

@@ -34,7 +34,11 @@ fn planner(c: &mut Criterion) {
         ("snatch", examples::SNATCH, &[7usize, 9, 12][..]),
         ("throw", examples::THROW, &[5usize, 7, 9, 12][..]),
         ("roll", examples::ROLL, &[7usize, 9, 11, 13][..]),
-        ("rolling_throw", examples::ROLLING_THROW, &[7usize, 9, 12][..]),
+        (
+            "rolling_throw",
+            examples::ROLLING_THROW,
+            &[7usize, 9, 12][..],
+        ),
     ] {
         for &n in knots {
             let sys = ArmConfig::from_toml_str(&with_knots(text, n))

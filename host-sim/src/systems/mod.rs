@@ -17,7 +17,7 @@ pub mod line;
 pub mod planar;
 pub mod planar_juggler;
 
-use crate::controller::{HilReport, StepController};
+use crate::controller::{HilReport, SafeSteps, StepController};
 use crate::external::OnTarget;
 use crate::output::TraceRow;
 use crate::scene::{SceneError, SceneFile};
@@ -133,6 +133,18 @@ pub trait Outcome {
     /// The HIL figures of a run whose controller ran on the target.
     fn attach_hil(&mut self, report: HilReport) {
         let _ = report;
+    }
+    /// The controller's safe-state steps, for a system that closes its loop through one
+    /// (stepped through [`crate::controller::Counted`]): `run` warns on the terminal when
+    /// there are any, and exits with status 1 when they are more than half of the steps.
+    fn safe_steps(&self) -> Option<&SafeSteps> {
+        None
+    }
+    /// Why the run stopped before doing what was asked for a reason other than the
+    /// system's physics (an internal cap, a non-finite state), as the summary names it:
+    /// `run` prints the summary, then this as the error, and exits with status 1.
+    fn shortfall(&self) -> Option<String> {
+        None
     }
 }
 

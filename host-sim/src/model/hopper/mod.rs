@@ -26,11 +26,14 @@
 //! period doubling. [`params::HopperParams`] is the scene's `[hopper]` table.
 
 pub mod analysis;
+pub mod eq17;
 pub mod full;
 pub mod integrate;
 pub mod linear;
 pub mod nonlinear;
 pub mod params;
+pub mod sampled;
+pub mod valve;
 
 pub use full::FullNonlinear;
 pub use integrate::Integrator;
@@ -44,6 +47,10 @@ use dexter_core::params::ParamError;
 /// Most dense samples one run keeps ([`RunOptions::samples_per_phase`] is per phase; the run
 /// stops sampling, not simulating, once this many are stored).
 pub const MAX_SAMPLES: usize = 200_000;
+
+/// Most samples per phase and hop (`hopper.samples_per_phase`): a run computes at most
+/// [`MAX_SAMPLES`] plus one phase's worth of them.
+pub const MAX_SAMPLES_PER_PHASE: usize = 10_000;
 
 /// Why a hopper could not be built or run. Parameter errors name the scene key.
 #[derive(Clone, Debug, PartialEq)]
@@ -183,8 +190,9 @@ impl Start {
 pub enum RunEnd {
     /// All requested cycles were simulated.
     Completed,
-    /// The body turned back down before the leg was extended: no liftoff (the hopper
-    /// stalls on the ground; the cycle is not recorded).
+    /// The body turned back down before the leg was extended, or nothing drives it out of
+    /// the bottom (eq. 9 with no thrust, tau = 0): no liftoff (the hopper stalls on the
+    /// ground; the cycle is not recorded).
     NoLiftoff,
     /// The energy servo asked for a thrust tau_n <= g in a model whose thrust phase has no
     /// spring support (linear with delta > 0, full): the body would sink during the thrust;
@@ -301,8 +309,10 @@ pub(crate) struct Sampler<'a> {
 }
 
 impl Sampler<'_> {
+    /// True while samples are wanted and room is left for them: a run stops computing
+    /// samples, not simulating, once [`MAX_SAMPLES`] are stored.
     pub fn on(&self) -> bool {
-        self.per_phase > 0 && self.out.is_some()
+        self.per_phase > 0 && self.out.as_ref().is_some_and(|v| v.len() < MAX_SAMPLES)
     }
     pub fn push(&mut self, phase: StancePhase, state: HopEvent) {
         if let Some(v) = self.out.as_deref_mut() {

@@ -22,6 +22,7 @@ use super::{NoController, System};
 use crate::controller::StepController;
 use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Hopper, HopperParams, RunEnd, Start, MAX_SAMPLES};
+use crate::progress::Progress;
 use crate::scene::{deserialize, SceneError, SceneFile};
 use crate::verbs::{AnalyzeRequest, Failure, Setup, SweepRequest};
 use serde::Deserialize;
@@ -167,9 +168,12 @@ impl System for HopperSystem {
         }
         let wall = Instant::now();
         let mut trajectories = Vec::with_capacity(cfg.starts.len());
+        let total = (cfg.params.cycles * cfg.starts.len()) as f64;
+        let mut bar = Progress::new([(total, "cycles")], setup.progress);
         for (i, &start) in cfg.starts.iter().enumerate() {
             let mut t = Trajectory::new(start);
             let mut samples = Vec::new();
+            let done_before = (i * cfg.params.cycles) as f64;
             let (end, steps) = cfg
                 .hopper
                 .run_with_samples(start, cfg.params.cycles, &opts, &mut samples, &mut |c| {
@@ -178,11 +182,15 @@ impl System for HopperSystem {
                         trajectory: i + 1,
                         cycle: *c,
                     });
+                    if c.index % 4096 == 0 {
+                        bar.update([done_before + c.index as f64]);
+                    }
                 })
                 .map_err(Failure::scene)?;
             t.finish(end, steps, samples);
             trajectories.push(t);
         }
+        bar.finish();
         Ok(HopperOutcome::new(
             cfg,
             trajectories,

@@ -4,8 +4,10 @@
 //!
 //! Loading: `[planar]` table (`--set` applied) -> [`PlanarParams`] (unknown keys and wrong
 //! types name the dotted key) -> [`PlanarParams::build`] and [`PlanarParams::start`] (range
-//! errors name the key). A run keeps its impacts (at most
-//! [`crate::model::planar::MAX_IMPACTS`], the validator's cap) for its stability class.
+//! errors name the key). A run streams its impacts (to the trace and the plots) and keeps
+//! its summary and stability class in constant memory
+//! ([`crate::model::planar::stats::RunStats`]); `planar.impacts` is at most
+//! [`crate::model::planar::MAX_IMPACTS`] (a bound on its time).
 
 pub mod analyze;
 pub mod plots;
@@ -17,8 +19,12 @@ use self::summary::{summarize, summary_text, RunSummary};
 use self::trace::PlanarRow;
 use super::{NoController, Outcome, System};
 use crate::controller::StepController;
-use crate::model::planar::{PlanarError, PlanarModel, PlanarParams, PlanarState, MAX_IMPACTS};
+use crate::model::planar::stats::RunStats;
+use crate::model::planar::{
+    PlanarError, PlanarModel, PlanarParams, PlanarState, RunEnd, MAX_IMPACTS,
+};
 use crate::output::{json_text, JsonStyle};
+use crate::progress::Progress;
 use crate::scene::{deserialize, SceneError, SceneFile};
 use crate::verbs::{AnalyzeRequest, Failure, Setup, SweepRequest};
 use serde::Deserialize;
@@ -68,6 +74,18 @@ impl Outcome for PlanarOutcome {
     fn json(&self) -> Result<String, String> {
         json_text(&self.summary, JsonStyle::Compact)
     }
+    /// A contact search at its cap, or a non-finite state, is not the body's physics.
+    fn shortfall(&self) -> Option<String> {
+        let s = &self.summary;
+        matches!(s.end, RunEnd::SearchCap | RunEnd::NonFinite).then(|| {
+            format!(
+                "after {} of {} impacts: {}",
+                s.impacts,
+                s.impacts_requested,
+                summary::end_words(s.end)
+            )
+        })
+    }
 }
 
 /// A model error as a failure: analysis failures are run failures, the rest bad scenes.
@@ -109,22 +127,27 @@ impl System for PlanarSystem {
     fn run(
         cfg: &PlanarConfig,
         _: Option<&mut dyn StepController<NoController>>,
-        _: &Setup,
+        setup: &Setup,
         rows: &mut dyn FnMut(&PlanarRow),
     ) -> Result<PlanarOutcome, Failure> {
         let p = &cfg.params;
         let t0 = Instant::now();
-        let out = cfg.model.run(cfg.start, p.impacts, p.seed);
-        let wall_s = t0.elapsed().as_secs_f64();
         let l_m = cfg.model.l_m();
-        for record in &out.impacts {
-            rows(&PlanarRow {
-                record: *record,
-                l_m,
+        let mut stats = RunStats::new(&cfg.model, p.impacts);
+        let mut bar = Progress::new([(p.impacts as f64, "impacts")], setup.progress);
+        let done = cfg
+            .model
+            .run_streaming(cfg.start, p.impacts, p.seed, &mut |r| {
+                stats.push(r);
+                rows(&PlanarRow { record: *r, l_m });
+                if r.index % 4096 == 0 {
+                    bar.update([r.index as f64]);
+                }
             });
-        }
+        bar.finish();
+        let wall_s = t0.elapsed().as_secs_f64();
         Ok(PlanarOutcome {
-            summary: summarize(&cfg.name, p, &cfg.model, &out, p.impacts, wall_s),
+            summary: summarize(&cfg.name, p, &cfg.model, &stats, &done, wall_s),
         })
     }
 

@@ -7,6 +7,7 @@
 use super::summary::{class_name, class_words, kappa_crit_of, summarize};
 use super::{config_of, PlanarSystem};
 use crate::model::planar::analysis::CellClass;
+use crate::model::planar::stats::RunStats;
 use crate::model::planar::{PlanarParams, RunEnd};
 use crate::output::Sig17;
 use crate::plot::{key_label, Chart};
@@ -97,12 +98,15 @@ impl Sweeps for PlanarSystem {
         }
         let cfg = config_of(&base.config.name, table)?;
         let p = &cfg.params;
-        let run = cfg.model.run(cfg.start, p.impacts, p.seed);
-        let s = summarize(&cfg.name, p, &cfg.model, &run, p.impacts, 0.0);
+        let mut stats = RunStats::new(&cfg.model, p.impacts);
+        let done = cfg
+            .model
+            .run_streaming(cfg.start, p.impacts, p.seed, &mut |r| stats.push(r));
+        let s = summarize(&cfg.name, p, &cfg.model, &stats, &done, 0.0);
         Ok(SweepCell {
             class: s.class,
-            impacts: run.impacts.len(),
-            end: run.end,
+            impacts: done.impacts,
+            end: done.end,
             max_abs_theta_rad: s.max_abs_theta_rad,
             late_mean_energy_jpkg: s.late_mean_energy_jpkg,
         })

@@ -20,7 +20,7 @@ use std::time::Instant;
 /// Largest scaled constraint value a plan may keep and still count as feasible (a
 /// ten-thousandth of each constraint's scale: of g for forces, of the limit for torques
 /// and speeds, of a tenth of the tolerance for the goal). Friction rows are not left
-/// violated: mu is raised to what the samples need ([`repair_mu`]).
+/// violated: mu is raised to what the samples need (`repair_mu`).
 pub const FEASIBILITY_TOL: f64 = 1e-4;
 
 /// SQP stops a hair outside the friction cone; mu is a free variable, so raise it to
