@@ -151,7 +151,7 @@ pub struct StrokeAxisParams {
 }
 
 /// Everything a tilt controller needs, SI units, f32 (sent over the wire in HIL; about 135
-/// bytes postcard-encoded). Its serde form is its fields as one flat tuple ([`fields`]).
+/// bytes postcard-encoded). Its serde form is its fields as one flat tuple (the private `fields` module).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TiltParams {
@@ -486,7 +486,7 @@ impl<'de> Deserialize<'de> for TiltParams {
 }
 
 /// One sample of the plant: the camera's newest pose of the body and the table's encoders.
-/// Its serde form is its fields as one flat tuple ([`fields`]).
+/// Its serde form is its fields as one flat tuple (the private `fields` module).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TiltFrame {
@@ -1234,7 +1234,7 @@ impl<T: SinCos> FixedRate for TiltControllerWith<T> {
     }
 }
 
-/// The tilt controller with the math backend's sine and cosine ([`BackendSinCos`]: libm, or
+/// The tilt controller with the math backend's sine and cosine ([`BackendSinCos`](sincos::BackendSinCos): libm, or
 /// micromath with `fast-math`) on the wire as the [`Kind::Tilt`](crate::protocol::Kind::Tilt)
 /// kind, like the shipped [`TiltController`]: the same parameters, frames and commands. It
 /// is not shipped (libm's `sinf` alone is ~1350 instructions, over the step budget); a
