@@ -181,6 +181,9 @@ impl ArmOutcome {
         if s.events.len() > EVENTS_SHOWN {
             events.push(format!("... ({} in all)", s.events.len()));
         }
+        if events.is_empty() {
+            events.push("none (no phase change)".into());
+        }
         o += &format!("  events:      {}\n", events.join(", "));
         o
     }
