@@ -298,6 +298,9 @@ pub enum RunEnd {
     Jam,
     /// A state became non-finite.
     NonFinite,
+    /// The run's time limit passed before the requested impacts (only the real table has
+    /// one: `real_table.max_duration_s`).
+    TimeLimit,
 }
 
 /// How a streamed run ([`PlanarModel::run_streaming`]) ended.

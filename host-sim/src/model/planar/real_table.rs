@@ -52,7 +52,7 @@
 use super::camera::{Camera, CameraConfig, PerfectCamera, SampledCamera};
 use super::contact::{first_root, Contact, ContactError};
 use super::table_run::{
-    summarize, RunCounters, StepSample, TableImpact, TableKind, TableRun, TableRunEnd,
+    RunCounters, StepSample, SummaryBuilder, TableImpact, TableKind, TableRun, TableRunEnd,
 };
 use super::{Body, PlanarError, PlanarModel, PlanarState, TableCommand};
 use crate::controller::{ControllerError, StepController};
@@ -239,20 +239,52 @@ pub struct TableRunConfig {
     pub record: Vec<(f64, f64)>,
 }
 
+/// What a streamed run ([`stream_real_table`]) hands out as it goes.
+pub trait TableSink {
+    /// Every impact, as it happens.
+    fn impact(&mut self, r: &TableImpact);
+    /// The plant at every control step (before the step's command is applied).
+    fn step(&mut self, s: &StepSample) {
+        let _ = s;
+    }
+}
+
+/// Collecting every impact (what [`run_real_table`] does).
+impl TableSink for Vec<TableImpact> {
+    fn impact(&mut self, r: &TableImpact) {
+        self.push(*r);
+    }
+}
+
 /// Run the real table with the controller `ctrl` (configured with `table.controller`; any
 /// sine/cosine source `T`, the shipped [`TiltController`](dexter_core::tilt_control::TiltController)
 /// in SIL and HIL); the effects
 /// switched off in `table` cost nothing (the loop is compiled per combination). `Err` only
 /// if the controller fails (a link error in HIL); everything the plant does ends the run
-/// with a [`TableRunEnd`].
+/// with a [`TableRunEnd`]. The result holds every impact ([`stream_real_table`] keeps none).
 pub fn run_real_table<T: SinCos>(
     cfg: &TableRunConfig,
     table: &RealTable,
     ctrl: &mut dyn StepController<TiltControllerWith<T>>,
 ) -> Result<TableRun, ControllerError> {
+    let mut impacts = Vec::with_capacity(cfg.impacts.min(1 << 16));
+    let mut run = stream_real_table(cfg, table, ctrl, &mut impacts)?;
+    run.impacts = impacts;
+    Ok(run)
+}
+
+/// [`run_real_table`] in constant memory: each impact and each control step goes to `sink`
+/// as it happens, the summary is built on the way ([`SummaryBuilder`]), and the result's
+/// `impacts` is empty (its `samples` still holds the steps in `cfg.record`).
+pub fn stream_real_table<T: SinCos>(
+    cfg: &TableRunConfig,
+    table: &RealTable,
+    ctrl: &mut dyn StepController<TiltControllerWith<T>>,
+    sink: &mut dyn TableSink,
+) -> Result<TableRun, ControllerError> {
     match table.camera {
-        None => with_tilt(cfg, table, ctrl, PerfectCamera),
-        Some(c) => with_tilt(cfg, table, ctrl, SampledCamera::new(c)),
+        None => with_tilt(cfg, table, ctrl, PerfectCamera, sink),
+        Some(c) => with_tilt(cfg, table, ctrl, SampledCamera::new(c), sink),
     }
 }
 
@@ -261,10 +293,11 @@ fn with_tilt<T: SinCos, C: Camera>(
     table: &RealTable,
     ctrl: &mut dyn StepController<TiltControllerWith<T>>,
     camera: C,
+    sink: &mut dyn TableSink,
 ) -> Result<TableRun, ControllerError> {
     match table.tilt {
-        None => with_stroke(cfg, table, ctrl, camera, IdealActuator),
-        Some(d) => with_stroke(cfg, table, ctrl, camera, d.actuator()),
+        None => with_stroke(cfg, table, ctrl, (camera, IdealActuator), sink),
+        Some(d) => with_stroke(cfg, table, ctrl, (camera, d.actuator()), sink),
     }
 }
 
@@ -272,12 +305,12 @@ fn with_stroke<T: SinCos, C: Camera, A: Actuator>(
     cfg: &TableRunConfig,
     table: &RealTable,
     ctrl: &mut dyn StepController<TiltControllerWith<T>>,
-    camera: C,
-    tilt: A,
+    (camera, tilt): (C, A),
+    sink: &mut dyn TableSink,
 ) -> Result<TableRun, ControllerError> {
     match table.stroke {
-        None => Loop::new(cfg, table, camera, tilt, IdealActuator).run(ctrl),
-        Some(d) => Loop::new(cfg, table, camera, tilt, d.actuator()).run(ctrl),
+        None => Loop::new(cfg, table, camera, (tilt, IdealActuator), sink).run(ctrl),
+        Some(d) => Loop::new(cfg, table, camera, (tilt, d.actuator()), sink).run(ctrl),
     }
 }
 
@@ -518,7 +551,10 @@ struct Loop<'a, C, A, B> {
     table: &'a RealTable,
     plant: Plant<A, B>,
     camera: C,
-    impacts: Vec<TableImpact>,
+    sink: &'a mut dyn TableSink,
+    summary: SummaryBuilder,
+    /// Time of the latest impact, s.
+    last_impact_s: Option<f64>,
     samples: Vec<StepSample>,
     counters: RunCounters,
     /// The controller's latest prediction of the next impact's time, s.
@@ -526,7 +562,13 @@ struct Loop<'a, C, A, B> {
 }
 
 impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
-    fn new(cfg: &'a TableRunConfig, table: &'a RealTable, camera: C, tilt: A, stroke: B) -> Self {
+    fn new(
+        cfg: &'a TableRunConfig,
+        table: &'a RealTable,
+        camera: C,
+        (tilt, stroke): (A, B),
+        sink: &'a mut dyn TableSink,
+    ) -> Self {
         let plant = Plant {
             model: cfg.model,
             l: cfg.model.l_m(),
@@ -544,7 +586,9 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
             table,
             plant,
             camera,
-            impacts: Vec::with_capacity(cfg.impacts.min(super::MAX_IMPACTS)),
+            sink,
+            summary: SummaryBuilder::new(cfg.impacts),
+            last_impact_s: None,
             samples: Vec::new(),
             counters: RunCounters::default(),
             prediction: None,
@@ -559,7 +603,7 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
         let max_steps = (self.table.max_duration_s / dt).ceil() as u64;
         let mut end = TableRunEnd::TimeLimit;
         for k in 0..max_steps {
-            if self.impacts.len() >= self.cfg.impacts {
+            if self.summary.impacts() >= self.cfg.impacts {
                 end = TableRunEnd::Completed;
                 break;
             }
@@ -578,20 +622,16 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
                 break;
             }
         }
-        if end == TableRunEnd::TimeLimit && self.impacts.len() >= self.cfg.impacts {
+        if end == TableRunEnd::TimeLimit && self.summary.impacts() >= self.cfg.impacts {
             end = TableRunEnd::Completed;
         }
         self.counters.sim_time_s = self.plant.time_s;
-        let summary = summarize(
-            TableKind::Real,
-            &self.cfg.model,
-            &self.impacts,
-            end,
-            &self.counters,
-        );
+        let summary = self
+            .summary
+            .finish(TableKind::Real, &self.cfg.model, end, &self.counters);
         Ok(TableRun {
             summary,
-            impacts: self.impacts,
+            impacts: Vec::new(),
             samples: self.samples,
             hil: ctrl.hil_report(),
         })
@@ -649,23 +689,24 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
         }
         let planning = cmd.mode == Mode::Track
             && !matches!(cmd.plan, PlanStatus::Idle | PlanStatus::Unreachable);
-        let seen_last =
-            self.impacts.last().map_or(0.0, |r| r.time_s) + self.camera.latency_s() + 2.0 * dt;
+        let seen_last = self.last_impact_s.unwrap_or(0.0) + self.camera.latency_s() + 2.0 * dt;
         if planning && t_k > seen_last {
             self.prediction = Some(t_k + f64::from(cmd.impact_in_s));
         }
     }
 
     fn record(&mut self, t_k: f64) {
+        let p = &self.plant;
+        let sample = StepSample {
+            time_s: t_k,
+            body: p.pose(),
+            table_angle_rad: p.tilt.height_m,
+            table_height_m: p.stroke.height_m,
+        };
+        self.sink.step(&sample);
         let wanted = self.cfg.record.iter().any(|&(a, b)| t_k >= a && t_k <= b);
         if wanted && self.samples.len() < MAX_SAMPLES {
-            let p = &self.plant;
-            self.samples.push(StepSample {
-                time_s: t_k,
-                body: p.pose(),
-                table_angle_rad: p.tilt.height_m,
-                table_height_m: p.stroke.height_m,
-            });
+            self.samples.push(sample);
         }
     }
 
@@ -678,15 +719,18 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
                 continue;
             }
             let target = ts.min(t_next);
-            let index = self.impacts.len();
+            let index = self.summary.impacts();
             let prediction = &mut self.prediction;
-            let impacts = &mut self.impacts;
+            let (summary, sink, last) =
+                (&mut self.summary, &mut *self.sink, &mut self.last_impact_s);
             self.plant
                 .advance_to(target, index, self.cfg.impacts, &mut |mut rec| {
                     rec.predicted_time_s = prediction.take();
-                    impacts.push(rec);
+                    summary.push(&rec);
+                    sink.impact(&rec);
+                    *last = Some(rec.time_s);
                 })?;
-            if self.impacts.len() >= self.cfg.impacts || self.plant.time_s >= t_next {
+            if self.summary.impacts() >= self.cfg.impacts || self.plant.time_s >= t_next {
                 return Ok(());
             }
         }

@@ -56,6 +56,22 @@ impl From<RunEnd> for TableRunEnd {
             RunEnd::SearchCap => TableRunEnd::SearchCap,
             RunEnd::Jam => TableRunEnd::Jam,
             RunEnd::NonFinite => TableRunEnd::NonFinite,
+            RunEnd::TimeLimit => TableRunEnd::TimeLimit,
+        }
+    }
+}
+
+impl From<TableRunEnd> for RunEnd {
+    fn from(e: TableRunEnd) -> Self {
+        match e {
+            TableRunEnd::Completed => RunEnd::Completed,
+            TableRunEnd::TippedOver => RunEnd::TippedOver,
+            TableRunEnd::NoSeparation => RunEnd::NoSeparation,
+            TableRunEnd::NoContact => RunEnd::NoContact,
+            TableRunEnd::SearchCap => RunEnd::SearchCap,
+            TableRunEnd::Jam => RunEnd::Jam,
+            TableRunEnd::NonFinite => RunEnd::NonFinite,
+            TableRunEnd::TimeLimit => RunEnd::TimeLimit,
         }
     }
 }
@@ -212,6 +228,108 @@ pub struct RunCounters {
     pub sim_time_s: f64,
 }
 
+/// Most impacts in a late window: a run of more than four times this many impacts takes
+/// its late figures over its last `MAX_LATE_WINDOW` impacts (bounded memory however long).
+pub const MAX_LATE_WINDOW: usize = 1 << 18;
+
+/// A run's figures built impact by impact in bounded memory: the late window's energies and
+/// angles in a ring of at most [`MAX_LATE_WINDOW`], the rest as running maxima and sums.
+/// [`SummaryBuilder::finish`] gives the same figures, bit for bit, as summing over all the
+/// impacts would (the late sums are taken in the same order).
+#[derive(Clone, Debug)]
+pub struct SummaryBuilder {
+    late_cap: usize,
+    /// (energy J/kg, theta rad) of the newest impacts.
+    late: std::collections::VecDeque<(f64, f64)>,
+    impacts: usize,
+    max_abs_theta_rad: f64,
+    max_abs_x_m: f64,
+    predicted: usize,
+    error_sq_sum: f64,
+    error_max_s: f64,
+}
+
+impl SummaryBuilder {
+    /// Ready for a run of at most `requested` impacts (its late window is the last quarter
+    /// of the impacts that happen, so it never needs more than `requested / 4` of them).
+    pub fn new(requested: usize) -> Self {
+        Self {
+            late_cap: (requested / 4).clamp(1, MAX_LATE_WINDOW),
+            late: std::collections::VecDeque::new(),
+            impacts: 0,
+            max_abs_theta_rad: 0.0,
+            max_abs_x_m: 0.0,
+            predicted: 0,
+            error_sq_sum: 0.0,
+            error_max_s: 0.0,
+        }
+    }
+
+    /// One impact.
+    pub fn push(&mut self, r: &TableImpact) {
+        if self.late.len() == self.late_cap {
+            self.late.pop_front();
+        }
+        self.late.push_back((r.energy_jpkg, r.before.theta_rad));
+        self.impacts += 1;
+        self.max_abs_theta_rad = self.max_abs_theta_rad.max(r.before.theta_rad.abs());
+        self.max_abs_x_m = self.max_abs_x_m.max(r.before.x_m.abs());
+        if let Some(p) = r.predicted_time_s {
+            let e = r.time_s - p;
+            self.predicted += 1;
+            self.error_sq_sum += e * e;
+            self.error_max_s = self.error_max_s.max(e.abs());
+        }
+    }
+
+    /// Impacts pushed so far.
+    pub fn impacts(&self) -> usize {
+        self.impacts
+    }
+
+    /// The figures (eta* from `model`).
+    pub fn finish(
+        &self,
+        table: TableKind,
+        model: &PlanarModel,
+        end: TableRunEnd,
+        counters: &RunCounters,
+    ) -> TableSummary {
+        let eta_star = model.feedback.target_energy_jpkg();
+        let n = self.impacts;
+        let late = (n / 4).max(1).min(self.late.len());
+        let window = self.late.iter().skip(self.late.len() - late);
+        let late_mean = if late > 0 {
+            window.clone().map(|r| r.0).sum::<f64>() / late as f64
+        } else {
+            f64::NAN
+        };
+        let late_theta = window.map(|r| r.1.abs()).fold(0.0, f64::max);
+        let k = self.predicted;
+        TableSummary {
+            table,
+            impacts: n,
+            end,
+            tipped_over: end == TableRunEnd::TippedOver,
+            stayed_up: end == TableRunEnd::Completed,
+            target_energy_jpkg: eta_star,
+            late_window_impacts: late,
+            late_mean_energy_jpkg: late_mean,
+            late_energy_error: (late_mean - eta_star) / eta_star,
+            late_theta_max_rad: late_theta,
+            max_abs_theta_rad: self.max_abs_theta_rad,
+            max_abs_x_m: self.max_abs_x_m,
+            predicted_impacts: k,
+            impact_time_error_rms_s: (k > 0).then(|| (self.error_sq_sum / k as f64).sqrt()),
+            impact_time_error_max_s: (k > 0).then_some(self.error_max_s),
+            control_steps: counters.control_steps,
+            safe_steps: counters.safe_steps,
+            plan_steps: counters.plan_steps,
+            sim_time_s: counters.sim_time_s,
+        }
+    }
+}
+
 /// The summary of `impacts` (eta* from `model`).
 pub fn summarize(
     table: TableKind,
@@ -220,46 +338,11 @@ pub fn summarize(
     end: TableRunEnd,
     counters: &RunCounters,
 ) -> TableSummary {
-    let eta_star = model.feedback.target_energy_jpkg();
-    let n = impacts.len();
-    let late = (n / 4).max(1).min(n);
-    let window = &impacts[n - late..];
-    let late_mean = if late > 0 {
-        window.iter().map(|r| r.energy_jpkg).sum::<f64>() / late as f64
-    } else {
-        f64::NAN
-    };
-    let abs_max = |rs: &[TableImpact], f: fn(&TableImpact) -> f64| {
-        rs.iter().map(|r| f(r).abs()).fold(0.0, f64::max)
-    };
-    let errors: Vec<f64> = impacts
-        .iter()
-        .filter_map(|r| r.predicted_time_s.map(|p| r.time_s - p))
-        .collect();
-    let rms = (!errors.is_empty())
-        .then(|| (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt());
-    let max = (!errors.is_empty()).then(|| errors.iter().map(|e| e.abs()).fold(0.0, f64::max));
-    TableSummary {
-        table,
-        impacts: n,
-        end,
-        tipped_over: end == TableRunEnd::TippedOver,
-        stayed_up: end == TableRunEnd::Completed,
-        target_energy_jpkg: eta_star,
-        late_window_impacts: late,
-        late_mean_energy_jpkg: late_mean,
-        late_energy_error: (late_mean - eta_star) / eta_star,
-        late_theta_max_rad: abs_max(window, |r| r.before.theta_rad),
-        max_abs_theta_rad: abs_max(impacts, |r| r.before.theta_rad),
-        max_abs_x_m: abs_max(impacts, |r| r.before.x_m),
-        predicted_impacts: errors.len(),
-        impact_time_error_rms_s: rms,
-        impact_time_error_max_s: max,
-        control_steps: counters.control_steps,
-        safe_steps: counters.safe_steps,
-        plan_steps: counters.plan_steps,
-        sim_time_s: counters.sim_time_s,
+    let mut b = SummaryBuilder::new(impacts.len());
+    for r in impacts {
+        b.push(r);
     }
+    b.finish(table, model, end, counters)
 }
 
 /// The paper's ideal table ([`PlanarModel::run`]) as a [`TableRun`]: `impacts` impacts from

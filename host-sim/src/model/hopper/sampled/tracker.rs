@@ -64,8 +64,8 @@ pub struct TimelineRow {
     pub measured_compression_m: f64,
     /// True foot contact.
     pub contact: bool,
-    /// The true phase before the command (flight, thrust = valve open in stance,
-    /// compression = falling, decompression = rising).
+    /// The true phase at the step, as the exactly timed law has it: flight, compression
+    /// until the true bottom, thrust for delta from it, decompression until liftoff.
     pub true_phase: StancePhase,
     /// The phase the controller reports.
     pub detected_phase: StancePhase,
@@ -253,6 +253,7 @@ impl<'a> Tracker<'a> {
         }
         self.last_phase = to;
         self.last_valve = applied_open;
+        let true_phase = self.exact_phase(t, true_phase);
         self.timeline_row(
             t,
             cmd,
@@ -261,6 +262,19 @@ impl<'a> Tracker<'a> {
             true_phase,
             measured_compression_m,
         );
+    }
+
+    /// The exactly timed law's phase at `t`, from the plant's (flight or stance) and the
+    /// cycle's true bottom.
+    fn exact_phase(&self, t: f64, plant: StancePhase) -> StancePhase {
+        if plant == StancePhase::Flight {
+            return StancePhase::Flight;
+        }
+        match self.open.and_then(|c| c.bottom) {
+            Some((t_b, _)) if t >= t_b && t < t_b + self.delta_s => StancePhase::Thrust,
+            Some((t_b, _)) if t >= t_b => StancePhase::Decompression,
+            _ => StancePhase::Compression,
+        }
     }
 
     fn timeline_row(
