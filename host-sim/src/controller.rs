@@ -62,6 +62,23 @@ pub struct HilReport {
     pub steps_per_wall_second: f64,
 }
 
+impl HilReport {
+    /// The `HIL` line of a text summary (the same for every system).
+    pub fn text(&self) -> String {
+        format!(
+            "HIL              {} mismatches, {} link errors, {} timeouts, {} over budget, steps/s {:.0}, instr min/mean/max {}/{:.1}/{}\n",
+            self.sil_mismatches,
+            self.link_errors,
+            self.link_timeouts,
+            self.over_budget_steps,
+            self.steps_per_wall_second,
+            self.step_instructions_min,
+            self.step_instructions_mean,
+            self.step_instructions_max
+        )
+    }
+}
+
 /// A controller of kind `C` stepped once per control period with the plant's sensor frame.
 pub trait StepController<C: FixedRate = Controller> {
     /// One control step.

@@ -3,6 +3,8 @@
 //!
 //! | system | scene table | what |
 //! | --- | --- | --- |
+//! | [`arm`] | `[arm]` or `[task]` | Akella, Huang, Lynch & Mason's one-joint arm: snatch, throw, roll, rolling throw, planned and tracked |
+//! | [`hopper::sampled`] | `[hopper]` with `[hopper.control]` | the hopper's thrust valve switched by the core's fixed-rate controller (SIL, `--hil`) |
 //! | [`hopper`] | `[hopper]` | Koditschek & Bühler's vertical hopper: return maps, period doubling |
 //! | [`planar_juggler`] | `[planar_juggler]` | Rizzi & Koditschek's planar juggler, mirror law eq. 12 or the modified law eq. 15 |
 //! | [`planar`] | `[planar]` | Zumel & Erdmann's bouncing body on the kappa-tilt table |
@@ -10,6 +12,7 @@
 //!
 //! How to add one: `docs/adding-a-system.md`.
 
+pub mod arm;
 pub mod hopper;
 pub mod line;
 pub mod planar;
@@ -226,7 +229,9 @@ impl<S: System> Dispatch for S {
 
 /// Every system, in the order they are asked to claim a scene: the line system last (it
 /// claims every scene, so it runs those no other system claims).
-pub static SYSTEMS: [&dyn Dispatch; 4] = [
+pub static SYSTEMS: [&dyn Dispatch; 6] = [
+    &arm::ArmSystem,
+    &hopper::sampled::SampledHopperSystem,
     &hopper::HopperSystem,
     &planar_juggler::PlanarJugglerSystem,
     &planar::PlanarSystem,

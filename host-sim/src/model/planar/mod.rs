@@ -57,12 +57,15 @@
 //! eigenvalue solver), [`juggler`] (the planar juggler).
 
 pub mod analysis;
+pub mod camera;
 pub mod contact;
 pub mod eigen;
 pub mod impact;
 pub mod juggler;
 pub mod params;
+pub mod real_table;
 pub mod stats;
+pub mod table_run;
 
 pub use params::PlanarParams;
 
@@ -295,6 +298,9 @@ pub enum RunEnd {
     Jam,
     /// A state became non-finite.
     NonFinite,
+    /// The run's time limit passed before the requested impacts (only the real table has
+    /// one: `real_table.max_duration_s`).
+    TimeLimit,
 }
 
 /// How a streamed run ([`PlanarModel::run_streaming`]) ended.

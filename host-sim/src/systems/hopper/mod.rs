@@ -8,10 +8,15 @@
 //!   eq. 9 it also locates the first period doubling (alpha = e^2).
 //! - `analyze` ([`analyze`]): the fixed point of the simulated cycle map and its slope by
 //!   finite differences, beside the closed forms (eq. 15/19, eq. 17).
+//!
+//! A `[hopper]` scene with a `[hopper.control]` table is the sampled hopper instead
+//! ([`sampled`]): the thrust valve switched by the core's fixed-rate controller, in SIL or
+//! on the MCU (`--hil`).
 
 pub mod analyze;
 pub mod closed;
 pub mod plots;
+pub mod sampled;
 pub mod summary;
 pub mod sweep;
 pub mod trace;
@@ -148,6 +153,14 @@ impl System for HopperSystem {
 
     fn parse(file: &SceneFile, table: toml::Table) -> Result<HopperConfig, SceneError> {
         HopperConfig::from_table(&file.stem, table)
+    }
+
+    /// The exact hopper has no controller: `--hil` names the table that would add one.
+    fn controller_params(_: &HopperConfig) -> Result<Option<()>, SceneError> {
+        Err(SceneError::new(
+            "hopper.control",
+            "is absent: the exact hopper times its thrust exactly and has no controller to put on the target (--hil needs a [hopper.control] table: the sampled hopper, docs/hopper.md)",
+        ))
     }
 
     fn run(

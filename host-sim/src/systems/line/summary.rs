@@ -235,17 +235,7 @@ impl Summary {
         s += &format!("sim time         {:.6} s\n", self.sim_time_s);
         s += &format!("wall time        {:.6} s\n", self.wall_time_s);
         if let Some(h) = &self.hil {
-            s += &format!(
-                "HIL              {} mismatches, {} link errors, {} timeouts, {} over budget, steps/s {:.0}, instr min/mean/max {}/{:.1}/{}\n",
-                h.sil_mismatches,
-                h.link_errors,
-                h.link_timeouts,
-                h.over_budget_steps,
-                h.steps_per_wall_second,
-                h.step_instructions_min,
-                h.step_instructions_mean,
-                h.step_instructions_max
-            );
+            s += &h.text();
         }
         s
     }

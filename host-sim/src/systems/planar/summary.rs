@@ -66,6 +66,18 @@ pub struct RunSummary {
     pub mean_theta_rad: f64,
     /// The stability-map class of this run (`analysis::classify`).
     pub class: CellClass,
+    /// `ideal` (the paper's table) or `real` (`[real_table]`).
+    pub table: &'static str,
+    /// The run ended because |theta| reached the tip angle.
+    pub tipped_over: bool,
+    /// (late mean eta - eta*)/eta*, as `late_mean_energy_rel_error` (issue 11's name, the
+    /// same for both tables).
+    pub late_energy_error: f64,
+    /// max |theta| at impacts over the late window, rad, as `late_max_abs_theta_rad`.
+    pub late_theta_max_rad: f64,
+    /// The real table's figures (absent for the ideal table).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub real: Option<super::closed::RealFigures>,
     /// Gap evaluations of all contact searches.
     pub gap_evaluations: usize,
     /// Simulated time, s (= end_time_s).
@@ -128,6 +140,11 @@ pub(super) fn summarize(
         late_max_abs_theta_rad: late.max_abs_law_rad,
         mean_theta_rad: stats.mean_law_rad(),
         class: stats.class(done.end),
+        table: "ideal",
+        tipped_over: done.end == RunEnd::TippedOver,
+        late_energy_error: (late.mean_energy_jpkg - eta_star) / eta_star,
+        late_theta_max_rad: late.max_abs_law_rad,
+        real: None,
         gap_evaluations: done.gap_evaluations,
         sim_time_s: stats.end_time_s,
         wall_time_s: wall_s,
@@ -143,6 +160,7 @@ pub(super) fn end_words(end: RunEnd) -> &'static str {
         RunEnd::SearchCap => "the contact search hit its iteration cap (an internal limit)",
         RunEnd::Jam => "Painleve jam in a frictional impact",
         RunEnd::NonFinite => "a state became non-finite",
+        RunEnd::TimeLimit => "the time limit (real_table.max_duration_s) passed",
     }
 }
 
@@ -233,6 +251,9 @@ pub(super) fn summary_text(s: &RunSummary) -> String {
         s.max_abs_theta_rad, s.late_max_abs_theta_rad, s.mean_theta_rad
     );
     let _ = writeln!(o, "  class:        {}", class_words(s.class));
+    if let Some(r) = &s.real {
+        o += &r.text();
+    }
     let _ = writeln!(
         o,
         "  time:         simulated {:.3} s, wall {:.3} ms ({} gap evaluations)",

@@ -2,7 +2,9 @@
 //! with the swept value(s) set, run for `planar.impacts` and classified by
 //! [`crate::model::planar::analysis::classify`]. CSV: the swept key(s), `class`, `impacts`, `end`,
 //! `max_abs_theta_rad`, `late_mean_energy_jpkg`, rows range2-major; with `--csv` a letter
-//! grid is printed; `--plot` draws `{stem}-stability`.
+//! grid and the count of cells upright for all impacts are printed; `--plot` draws
+//! `{stem}-stability`. A scene with a `[real_table]` runs each cell on the real table (SIL),
+//! so `--range planar.seed=1:20:20` counts the camera seeds that stay upright.
 
 use super::summary::{class_name, class_words, kappa_crit_of, summarize};
 use super::{config_of, PlanarSystem};
@@ -13,7 +15,7 @@ use crate::output::Sig17;
 use crate::plot::{key_label, Chart};
 use crate::scene::SceneError;
 use crate::stream::Decimator;
-use crate::verbs::{Failure, SweepBase, SweepReport, Sweeps};
+use crate::verbs::{Failure, Setup, SweepBase, SweepReport, Sweeps};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -68,6 +70,8 @@ pub struct PlanarSweepReport {
     cells: Vec<(f64, Option<f64>, CellClass, f64)>,
     impacts: usize,
     kappa_crit: f64,
+    /// Cells that completed every impact upright.
+    upright: usize,
 }
 
 impl Sweeps for PlanarSystem {
@@ -97,6 +101,17 @@ impl Sweeps for PlanarSystem {
             crate::scene::apply_set(&mut table, &r.key, swept_value(&r.key, y))?;
         }
         let cfg = config_of(&base.config.name, table)?;
+        if let Some(t) = &cfg.real {
+            let out = super::closed::run_real(&cfg, t, None, &Setup::default(), &mut |_| {})?;
+            let s = out.summary;
+            return Ok(SweepCell {
+                class: s.class,
+                impacts: s.impacts,
+                end: s.end,
+                max_abs_theta_rad: s.max_abs_theta_rad,
+                late_mean_energy_jpkg: s.late_mean_energy_jpkg,
+            });
+        }
         let p = &cfg.params;
         let mut stats = RunStats::new(&cfg.model, p.impacts);
         let done = cfg
@@ -121,6 +136,7 @@ impl Sweeps for PlanarSystem {
             cells: Vec::new(),
             impacts: base.config.params.impacts,
             kappa_crit: kappa_crit_of(&base.config.model),
+            upright: 0,
         }
     }
 }
@@ -163,6 +179,7 @@ impl SweepReport<PlanarSystem> for PlanarSweepReport {
     }
 
     fn add(&mut self, x: f64, y: Option<f64>, c: SweepCell) {
+        self.upright += usize::from(c.end == RunEnd::Completed);
         self.cells
             .push((x, y, c.class, y.unwrap_or(c.max_abs_theta_rad)));
     }
@@ -199,6 +216,13 @@ impl SweepReport<PlanarSystem> for PlanarSweepReport {
             }
             grid.push('\n');
         }
+        let _ = writeln!(
+            grid,
+            "upright for all {} impacts: {} of {} cells",
+            self.impacts,
+            self.upright,
+            self.cells.len()
+        );
         Ok(grid)
     }
 
