@@ -12,10 +12,21 @@ pub trait Actuator {
     /// The acceleration the paddle actually gets for command `command_mps2` in `paddle`'s
     /// state, m/s^2.
     fn accel(&self, paddle: &PaddleState<f64>, command_mps2: f64) -> f64;
-    /// Time until the regime with acceleration `accel_mps2` ends, s (infinite if never):
-    /// exact when shorter than `within_s`, else any value `>= within_s` (the caller only
-    /// needs to know that the regime outlasts its segment).
-    fn time_to_switch(&self, paddle: &PaddleState<f64>, accel_mps2: f64, within_s: f64) -> f64;
+    /// Time until the regime with acceleration `accel_mps2` ends, s (infinite if never).
+    fn time_to_switch(&self, paddle: &PaddleState<f64>, accel_mps2: f64) -> f64;
+    /// As [`time_to_switch`](Actuator::time_to_switch) when that is shorter than
+    /// `within_s`, else any value `>= within_s`: for a caller that only needs to know that
+    /// the regime outlasts its segment (a model may then skip work).
+    #[inline]
+    fn time_to_switch_within(
+        &self,
+        paddle: &PaddleState<f64>,
+        accel_mps2: f64,
+        within_s: f64,
+    ) -> f64 {
+        let _ = within_s;
+        self.time_to_switch(paddle, accel_mps2)
+    }
     /// Snap the state onto the limit that was just reached (removes rounding).
     fn settle(&self, paddle: &mut PaddleState<f64>);
 }
@@ -30,7 +41,7 @@ impl Actuator for IdealActuator {
         command_mps2
     }
     #[inline]
-    fn time_to_switch(&self, _: &PaddleState<f64>, _: f64, _: f64) -> f64 {
+    fn time_to_switch(&self, _: &PaddleState<f64>, _: f64) -> f64 {
         f64::INFINITY
     }
     #[inline]
@@ -126,7 +137,11 @@ impl Actuator for SecondOrderActuator {
         a
     }
 
-    fn time_to_switch(&self, p: &PaddleState<f64>, a: f64, within_s: f64) -> f64 {
+    fn time_to_switch(&self, p: &PaddleState<f64>, a: f64) -> f64 {
+        self.time_to_stop_or(p, a, self.time_to_speed_limit(p, a))
+    }
+
+    fn time_to_switch_within(&self, p: &PaddleState<f64>, a: f64, within_s: f64) -> f64 {
         let t = self.time_to_speed_limit(p, a);
         if self.stops_out_of_reach(p, a, t.min(within_s)) {
             // the speed limit (or nothing) ends the regime, or it outlasts the segment
@@ -179,8 +194,8 @@ mod tests {
                 _ => -1.0 + 10f64.powi(near_stop_exp),
             };
             let p = PaddleState::new(height_m, v);
-            let full = act.time_to_stop_or(&p, a, act.time_to_speed_limit(&p, a));
-            let fast = act.time_to_switch(&p, a, within);
+            let full = act.time_to_switch(&p, a);
+            let fast = act.time_to_switch_within(&p, a, within);
             if full < within {
                 prop_assert_eq!(fast, full);
             } else {
@@ -211,13 +226,13 @@ mod tests {
         let a = act();
         let mut p = PaddleState::new(0.0, 0.0);
         // 10 m/s^2 from rest reaches 2 m/s after 0.2 s (0.2 m travelled)
-        let t = a.time_to_switch(&p, 10.0, f64::INFINITY);
+        let t = a.time_to_switch(&p, 10.0);
         assert!((t - 0.2).abs() < 1e-15);
         p = PaddleState::new(0.2, 2.0);
         a.settle(&mut p);
         assert_eq!(a.accel(&p, 10.0), 0.0);
         // coasting at 2 m/s reaches the stop at 1 m after 0.4 s
-        assert!((a.time_to_switch(&p, 0.0, f64::INFINITY) - 0.4).abs() < 1e-12);
+        assert!((a.time_to_switch(&p, 0.0) - 0.4).abs() < 1e-12);
         let mut q = PaddleState::new(1.0, 2.0);
         a.settle(&mut q);
         assert_eq!(q, PaddleState::new(1.0, 0.0));

@@ -134,7 +134,7 @@ const CLEAR_GAP: f64 = 1e-9;
 /// excludes. Non-finite input gives false.
 #[inline]
 pub fn clearly_apart(c0: f64, c1: f64, c2: f64, h: f64) -> bool {
-    if !(c0 > 0.0) {
+    if c0.is_nan() || c0 <= 0.0 {
         return false;
     }
     let linear = c1 * h;

@@ -143,7 +143,7 @@ impl<A: Actuator> Surface for Actuated<A> {
     #[inline]
     fn max_segment_s(&self, within_s: f64) -> f64 {
         self.actuator
-            .time_to_switch(&self.paddle, self.accel_mps2, within_s)
+            .time_to_switch_within(&self.paddle, self.accel_mps2, within_s)
     }
     #[inline]
     fn advance(&mut self, dt: f64, to_switch: bool) {
