@@ -126,7 +126,7 @@ const CLEAR_GAP: f64 = 1e-9;
 
 /// True if `c0 + c1 t + c2 t^2` provably stays above zero on `[0, h]`: `c0 > 0` and each
 /// term at its lowest over the window (`c1 t >= min(0, c1 h)`, `c2 t^2 >= min(0, c2 h^2)`)
-/// still leaves a margin of [`CLEAR_GAP`] times the terms' size. Then [`first_contact`]
+/// still leaves a margin of `CLEAR_GAP` (1e-9) times the terms' size. Then [`first_contact`]
 /// returns `None`, and a caller may skip it: the common case of a ball well above the
 /// paddle over a short segment (a control period) costs no square root or division.
 /// In [`first_contact`] a contact needs the gap within rounding of zero somewhere in
