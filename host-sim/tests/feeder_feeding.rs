@@ -105,7 +105,7 @@ struct Tally {
     feeds: usize,
 }
 
-fn feeding_property(seed: u64, convex_parts: usize, star_parts: usize, arrivals: usize) -> Tally {
+fn generate(seed: u64, convex_parts: usize, star_parts: usize) -> (Vec<Part>, usize) {
     let mut rng = StdRng::seed_from_u64(seed);
     let mut parts = Vec::new();
     let mut skipped = 0;
@@ -132,14 +132,63 @@ fn feeding_property(seed: u64, convex_parts: usize, star_parts: usize, arrivals:
         }
     }
     assert_eq!(parts.len(), convex_parts + star_parts, "generator starved");
+    (parts, skipped)
+}
+
+/// Debugging aid: `FEEDER_PART=k [FEEDER_ARRIVAL=i] cargo test --release --test
+/// feeder_feeding -- --ignored one_feed --nocapture` plans part k of the full sweep.
+#[test]
+#[ignore = "debugging aid"]
+fn one_feed() {
+    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<usize>().ok());
+    let k = env("FEEDER_PART").unwrap_or(0);
+    let (parts, _) = generate(1996, 200, 50);
+    let f = cell(parts[k].clone());
+    let p = &f.part;
+    println!("part {k}: rho {:.5} radius {:.5}", p.rho_m, p.radius_m);
+    for e in &p.edges {
+        println!(
+            "  edge {}: len {:.5} a {:.5} b {:.5} h {:.5} dir {:.2} deg stable {}",
+            e.index,
+            e.len_m,
+            e.a_m,
+            e.b_m(),
+            e.h_m,
+            e.dir_rad.to_degrees(),
+            p.is_stable(e.index)
+        );
+    }
+    println!("  goal {:?}", goal_edge(p));
+    let spec = SweepSpec {
+        trials: 20,
+        seed: 1996 + k as u64,
+        x_range_m: (0.15, 0.6),
+        y_m: 0.1,
+    };
+    for (i, a) in sweep_arrivals(&spec).into_iter().enumerate() {
+        if env("FEEDER_ARRIVAL").is_some_and(|j| j != i) {
+            continue;
+        }
+        match plan(&f, a, &PlanOptions::default()) {
+            Ok(pl) => {
+                let ex = execute(&f, &pl, a, None);
+                println!("arrival {i}: {} {:?}", ex.reached_goal, pl.steps);
+            }
+            Err(e) => println!("arrival {i}: {e}"),
+        }
+    }
+}
+
+fn feeding_property(seed: u64, convex_parts: usize, star_parts: usize, arrivals: usize) -> Tally {
+    let (parts, skipped) = generate(seed, convex_parts, star_parts);
     let outcomes: Vec<(usize, Vec<String>)> = parts
         .into_par_iter()
         .enumerate()
         .map(|(k, p)| feed_part(seed, k, p, arrivals))
         .collect();
     let failures: Vec<String> = outcomes.iter().flat_map(|o| o.1.iter().cloned()).collect();
-    for f in failures.iter().take(20) {
-        println!("{f}");
+    for f in &failures {
+        println!("FAIL {f}");
     }
     assert!(
         failures.is_empty(),
@@ -169,7 +218,7 @@ fn feed_part(seed: u64, k: usize, p: Part, arrivals: usize) -> (usize, Vec<Strin
         let pl = match plan(&f, a, &PlanOptions::default()) {
             Ok(pl) => pl,
             Err(e) => {
-                bad.push(format!("part {k} {:?} from {a:?}: {e}", f.part.hull));
+                bad.push(format!("part {k} {:?} from {a:?}: PLAN {e}", f.part.hull));
                 continue;
             }
         };
@@ -179,8 +228,8 @@ fn feed_part(seed: u64, k: usize, p: Part, arrivals: usize) -> (usize, Vec<Strin
             fed += 1;
         } else {
             bad.push(format!(
-                "part {k} from {a:?}: {:?} edge {:?} radius error {:.2e}",
-                ex.failure, ex.final_edge, ex.radius_error_m
+                "part {k} {:?} from {a:?}: EXEC {:?} edge {:?} (goal {}) radius error {:.2e}",
+                f.part.hull, ex.failure, ex.final_edge, pl.goal_edge, ex.radius_error_m
             ));
         }
     }
