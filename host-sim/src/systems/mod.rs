@@ -3,6 +3,7 @@
 //!
 //! | system | scene table | what |
 //! | --- | --- | --- |
+//! | [`feeder`] | `[feeder]` | Akella, Huang, Lynch & Mason's 1JOC parts feeder: plan, simulated feed, fraction fed |
 //! | [`hopper`] | `[hopper]` | Koditschek & Bühler's vertical hopper: return maps, period doubling |
 //! | [`planar_juggler`] | `[planar_juggler]` | Rizzi & Koditschek's planar juggler, mirror law eq. 12 or the modified law eq. 15 |
 //! | [`planar`] | `[planar]` | Zumel & Erdmann's bouncing body on the kappa-tilt table |
@@ -10,6 +11,7 @@
 //!
 //! How to add one: `docs/adding-a-system.md`.
 
+pub mod feeder;
 pub mod hopper;
 pub mod line;
 pub mod planar;
@@ -214,7 +216,8 @@ impl<S: System> Dispatch for S {
 
 /// Every system, in the order they are asked to claim a scene: the line system last (it
 /// claims every scene, so it runs those no other system claims).
-pub static SYSTEMS: [&dyn Dispatch; 4] = [
+pub static SYSTEMS: [&dyn Dispatch; 5] = [
+    &feeder::FeederSystem,
     &hopper::HopperSystem,
     &planar_juggler::PlanarJugglerSystem,
     &planar::PlanarSystem,
