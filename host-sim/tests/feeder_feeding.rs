@@ -187,9 +187,6 @@ fn feeding_property(seed: u64, convex_parts: usize, star_parts: usize, arrivals:
         .map(|(k, p)| feed_part(seed, k, p, arrivals))
         .collect();
     let failures: Vec<String> = outcomes.iter().flat_map(|o| o.1.iter().cloned()).collect();
-    for f in &failures {
-        println!("FAIL {f}");
-    }
     assert!(
         failures.is_empty(),
         "{} of {} feeds failed (first ones printed above)",
@@ -232,6 +229,9 @@ fn feed_part(seed: u64, k: usize, p: Part, arrivals: usize) -> (usize, Vec<Strin
                 f.part.hull, ex.failure, ex.final_edge, pl.goal_edge, ex.radius_error_m
             ));
         }
+    }
+    for b in &bad {
+        println!("FAIL {b}");
     }
     (fed, bad)
 }

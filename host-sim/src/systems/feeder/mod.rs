@@ -90,7 +90,7 @@ impl System for FeederSystem {
     ) -> Result<FeederOutcome, Failure> {
         let b = &cfg.built;
         let t0 = Instant::now();
-        let p = plan(&b.feeder, b.arrival, &b.options).map_err(|e| Failure::scene(e))?;
+        let p = plan(&b.feeder, b.arrival, &b.options).map_err(Failure::scene)?;
         let wall_s = t0.elapsed().as_secs_f64();
         let names: Vec<&'static str> = p.steps.iter().map(|s| s.name()).collect();
         let ex = execute_observed(&b.feeder, &p, b.arrival, b.noise.as_ref(), &mut |r| {

@@ -162,7 +162,7 @@ pub fn moments(s: &Summary) -> Vec<(usize, String)> {
                 if let Some(i) = at(*tp).next() {
                     add(i, format!("{k} {}: release", short(p)));
                 }
-                if let Some(i) = at(*tm).last() {
+                if let Some(i) = at(*tm).next_back() {
                     add(i, format!("{k} {}: catch", short(p)));
                 }
             }
