@@ -288,7 +288,7 @@ mod tests {
         assert_eq!(out.deadline, Deadline::Overrun { ticks_lost: 0 });
         assert!(out.command.bit_identical(&safe));
         assert_eq!(out.command.mode, Mode::Safe);
-        assert_eq!(out.command.fault, Fault::Stale);
+        assert_eq!(out.command.fault, Fault::Overrun);
         assert_eq!(rig.applied.len(), 2, "the late command, then the safe one");
         assert!(rig.applied[1].bit_identical(&safe));
         let s = p.stats();

@@ -7,6 +7,13 @@
 //! (`Rejection::NotHosted`), so an image can leave out the controllers a board does not
 //! run, to save flash.
 //!
+//! Which kinds an image hosts is a cargo feature selection (firmware/Cargo.toml): the line
+//! juggler and the link check always; the tilt table (`tilt`), the hopper (`hop`) and the
+//! one-joint arm (`arm`) each behind its feature. The default image (`tilt`, `hop`) is the
+//! one `memory.x`'s 32 KiB of flash was sized for; the arm image is built with
+//! `--no-default-features --features arm` (firmware/README.md, "Images"). An entry's
+//! `if <cfg predicate>` gates its variant and every match arm on it.
+//!
 //! Timing: [`Hosted::step`] and [`Hosted::safe`] measure the core's `step`/`safe` call
 //! only, with interrupts masked; the dispatch on the kind and the wrapping of the command
 //! into [`Command`] are outside the measured window.
@@ -14,7 +21,8 @@
 use crate::board::StepTimer;
 use dexter_core::fixed_rate::FixedRate;
 use dexter_core::params::ParamError;
-use dexter_core::protocol::{Command, Config, Fault, Frame, Kind, Telemetry, Wire};
+use dexter_core::protocol::{self, Command, Fault, Frame, Kind, Telemetry, Wire};
+use serde::de::VariantAccess;
 
 /// Measure `f` with interrupts masked, so a receive interrupt that lands inside the
 /// window is not counted as part of the control step (it runs right after).
@@ -50,9 +58,45 @@ fn safe_as<C: Wire, T: StepTimer>(
     (C::command(command), instructions)
 }
 
+/// A controller of kind `C` from `params`, or the error naming the first invalid one.
+///
+/// Not inlined, and generic, so that each kind's constructor and validation (cold code,
+/// `#[inline]` in the core) are compiled here, once, with the firmware's size-optimised
+/// profile (`Cargo.toml`), rather than with the core's speed-optimised one or into every
+/// caller.
+#[inline(never)]
+fn configure_as<C: Wire>(params: &C::Params) -> Result<C, ParamError> {
+    C::new(*params)
+}
+
+/// [`protocol::HostedKinds`] for an enum with one variant per hosted kind (`Params`): its
+/// kind, and the decoder of each hosted kind's value.
+macro_rules! hosted_kinds {
+    ($enum:ident { $($(#[cfg($cfg:meta)])? $name:ident($controller:ty)),+ }) => {
+        impl protocol::HostedKinds for $enum {
+            fn kind(&self) -> Kind {
+                match self {
+                    $(#[cfg(all($($cfg)?))] $enum::$name(_) => <$controller as Wire>::KIND,)+
+                }
+            }
+
+            fn decode<'de, A: VariantAccess<'de>>(
+                kind: Kind,
+                body: A,
+            ) -> Result<Result<Self, A>, A::Error> {
+                $(#[cfg(all($($cfg)?))]
+                if kind == <$controller as Wire>::KIND {
+                    return body.newtype_variant().map(|v| Ok($enum::$name(v)));
+                })+
+                Ok(Err(body))
+            }
+        }
+    };
+}
+
 /// `Hosted`: one variant per hosted controller, and its dispatch.
 macro_rules! hosted {
-    ($($(#[$doc:meta])* $name:ident($controller:ty)),+ $(,)?) => {
+    ($($(#[$doc:meta])* $name:ident($controller:ty) $(if $cfg:meta)?),+ $(,)?) => {
         /// A configured controller of one of the kinds this image hosts.
         ///
         /// Its variants differ in size by design: there is no heap to box the large ones
@@ -60,23 +104,32 @@ macro_rules! hosted {
         /// largest kind (the linker's RAM budget checks it).
         #[allow(clippy::large_enum_variant)]
         pub enum Hosted {
-            $($(#[$doc])* $name($controller),)+
+            $($(#[$doc])* #[cfg(all($($cfg)?))] $name($controller),)+
         }
 
+        /// The parameters of a kind this image hosts, as `Configure` decodes them (the
+        /// decoder of a kind it does not host is left out: `protocol::Partial`).
+        #[derive(Clone, Copy)]
+        pub enum Params {
+            $($(#[$doc])* #[cfg(all($($cfg)?))] $name(<$controller as FixedRate>::Params),)+
+        }
+
+        hosted_kinds!(Params { $($(#[cfg($cfg)])? $name($controller)),+ });
+
         impl Hosted {
-            /// The controller `config` asks for: `None` if this image does not host its
-            /// kind, else the controller or the error naming its first invalid parameter.
-            pub fn configure(config: &Config) -> Option<Result<Self, ParamError>> {
-                $(if let Some(params) = <$controller as Wire>::params_of(config) {
-                    return Some(<$controller as FixedRate>::new(*params).map(Hosted::$name));
-                })+
-                None
+            /// The controller `params` ask for, or the error naming its first invalid
+            /// parameter.
+            pub fn configure(params: &Params) -> Result<Self, ParamError> {
+                match params {
+                    $(#[cfg(all($($cfg)?))]
+                    Params::$name(p) => configure_as::<$controller>(p).map(Hosted::$name),)+
+                }
             }
 
             /// The configured controller's kind.
             pub fn kind(&self) -> Kind {
                 match self {
-                    $(Hosted::$name(_) => <$controller as Wire>::KIND,)+
+                    $(#[cfg(all($($cfg)?))] Hosted::$name(_) => <$controller as Wire>::KIND,)+
                 }
             }
 
@@ -88,30 +141,48 @@ macro_rules! hosted {
                 timer: &T,
             ) -> Result<(Command, u32), Kind> {
                 match self {
-                    $(Hosted::$name(c) => step_as(c, frame, timer),)+
+                    $(#[cfg(all($($cfg)?))] Hosted::$name(c) => step_as(c, frame, timer),)+
                 }
             }
 
             /// The safe command for an external fault, and the instructions it took.
             pub fn safe<T: StepTimer>(&mut self, seq: u32, fault: Fault, timer: &T) -> (Command, u32) {
                 match self {
-                    $(Hosted::$name(c) => safe_as(c, seq, fault, timer),)+
+                    $(#[cfg(all($($cfg)?))] Hosted::$name(c) => safe_as(c, seq, fault, timer),)+
                 }
             }
 
             /// What the core reports about its estimate.
             pub fn telemetry(&self) -> Telemetry {
                 match self {
-                    $(Hosted::$name(c) => c.telemetry(),)+
+                    $(#[cfg(all($($cfg)?))] Hosted::$name(c) => c.telemetry(),)+
                 }
             }
         }
     };
 }
 
+/// The tilt controller this image hosts: the shipped [`TiltController`] (polynomial sine and
+/// cosine), or with the feature `tilt-backend-sincos` (a measurement build, see
+/// firmware/Cargo.toml) the one with the math backend's (libm, or micromath with
+/// `fast-math`), to measure what accuracy costs on the target.
+///
+/// [`TiltController`]: dexter_core::tilt_control::TiltController
+#[cfg(all(feature = "tilt", not(feature = "tilt-backend-sincos")))]
+type HostedTilt = dexter_core::tilt_control::TiltController;
+#[cfg(feature = "tilt-backend-sincos")]
+type HostedTilt =
+    dexter_core::tilt_control::TiltControllerWith<dexter_core::tilt_control::sincos::BackendSinCos>;
+
 hosted! {
     /// The line juggler (mirror law, estimator, paddle tracker).
     Line(dexter_core::control::Controller),
     /// The link check (echoes a scaled value).
     Echo(dexter_core::echo::Echo),
+    /// The kappa-tilt table with energy feedback.
+    Tilt(HostedTilt) if feature = "tilt",
+    /// The hopper's thrust valve.
+    Hop(dexter_core::hop_control::HopController) if feature = "hop",
+    /// The one-joint arm (B-spline trajectory tracker with inverse dynamics).
+    Arm(dexter_core::arm_control::ArmController) if feature = "arm",
 }

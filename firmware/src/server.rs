@@ -31,11 +31,17 @@
 //! [`write_all`], which turns a link that stops accepting bytes into [`Exit::LinkFailed`].
 
 use crate::board::StepTimer;
-use crate::hosted::Hosted;
+use crate::hosted::{Hosted, Params};
 use dexter_core::protocol::{
-    encode, Command, Config, DecodeError, DeviceMessage, Fault, Frame, FrameDecoder, HostMessage,
-    Rejection, RunSummary, Telemetry, MAX_FRAME_LEN,
+    encode, Command, DecodeError, DeviceMessage, Fault, Frame, FrameDecoder, HostMessageOf,
+    HostedKinds, Partial, Rejection, RunSummary, Telemetry, MAX_FRAME_LEN,
 };
+
+/// A host message as this image decodes it: the wire form of
+/// [`dexter_core::protocol::HostMessage`], with `Configure` decoded for the hosted kinds
+/// only (a kind the image leaves out costs it no parameter decoder; it is answered
+/// `NotHosted`).
+pub type HostMessage = HostMessageOf<Partial<Params>, Frame>;
 
 /// Control periods without a valid frame after which the firmware answers with the safe
 /// command (lock-step: one period per received frame).
@@ -153,20 +159,23 @@ where
         }
     }
 
-    fn configure(&mut self, config: &Config) -> Option<Exit> {
-        let kind = config.kind();
+    fn configure(&mut self, config: &Partial<Params>) -> Option<Exit> {
         // A refused configuration leaves no controller: the host asked for another one.
         self.controller = None;
-        let answer = match Hosted::configure(config) {
-            None => {
+        let params = match config {
+            Partial::Hosted(params) => params,
+            Partial::NotHosted(kind) => {
                 defmt::warn!("controller kind {} is not hosted by this image", kind);
-                DeviceMessage::Rejected(Rejection::NotHosted(kind))
+                return self.send(&DeviceMessage::Rejected(Rejection::NotHosted(*kind)));
             }
-            Some(Err(e)) => {
+        };
+        let kind = params.kind();
+        let answer = match Hosted::configure(params) {
+            Err(e) => {
                 defmt::warn!("configuration of {} rejected: {}", kind, e);
                 DeviceMessage::Configured { kind, ok: false }
             }
-            Some(Ok(controller)) => {
+            Ok(controller) => {
                 defmt::info!("configured: {}", kind);
                 self.controller = Some(controller);
                 self.missed = 0;

@@ -1,5 +1,7 @@
 //! The arm planner's cost: B-spline knots vs solver iterations vs wall time vs the mu
-//! found, for the throw (gf) and the fig. 2 roll (grg). Before timing, each configuration
+//! found, for the four shipped tasks (snatch g, throw gf, the fig. 2 roll grg, rolling
+//! throw grf). `-- --test` plans each configuration once and prints the table without
+//! the timing runs. Before timing, each configuration
 //! is planned once and its row is printed (knots, iterations, evaluations, mu, wall time),
 //! so `cargo bench -p dexter-sim --bench arm_planner` prints the table as well.
 
@@ -10,11 +12,15 @@ use dexter_sim::model::arm::planner::plan;
 use std::hint::black_box;
 use std::time::Duration;
 
+/// The scene with `planner.knots` set (replaced, added to its `[planner]`, or a new one).
 fn with_knots(text: &str, knots: usize) -> String {
-    if text.contains("[planner]") {
-        text.replace("knots = 9", &format!("knots = {knots}"))
+    let line = format!("knots = {knots}");
+    if text.contains("knots = 9") {
+        text.replace("knots = 9", &line)
+    } else if text.contains("[planner]\n") {
+        text.replace("[planner]\n", &format!("[planner]\n{line}\n"))
     } else {
-        format!("{text}\n[planner]\nknots = {knots}\n")
+        format!("{text}\n[planner]\n{line}\n")
     }
 }
 
@@ -25,8 +31,14 @@ fn planner(c: &mut Criterion) {
     g.warm_up_time(Duration::from_millis(100));
     eprintln!("task | knots | iterations | evaluations | mu | wall time (s)");
     for (task, text, knots) in [
+        ("snatch", examples::SNATCH, &[7usize, 9, 12][..]),
         ("throw", examples::THROW, &[5usize, 7, 9, 12][..]),
         ("roll", examples::ROLL, &[7usize, 9, 11, 13][..]),
+        (
+            "rolling_throw",
+            examples::ROLLING_THROW,
+            &[7usize, 9, 12][..],
+        ),
     ] {
         for &n in knots {
             let sys = ArmConfig::from_toml_str(&with_knots(text, n))

@@ -6,9 +6,11 @@
 //! core linked in ([`Sil`]) or the firmware behind a link (`crate::hil`).
 
 use dexter_core::control::Controller;
-use dexter_core::fixed_rate::FixedRate;
+use dexter_core::fixed_rate::{FixedRate, Reply};
 use dexter_core::params::ParamError;
-use dexter_core::protocol::Telemetry;
+use dexter_core::protocol::{Fault, Mode, Telemetry};
+use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// What one control step returns: a command of the controller kind `C`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,6 +62,23 @@ pub struct HilReport {
     pub steps_per_wall_second: f64,
 }
 
+impl HilReport {
+    /// The `HIL` line of a text summary (the same for every system).
+    pub fn text(&self) -> String {
+        format!(
+            "HIL              {} mismatches, {} link errors, {} timeouts, {} over budget, steps/s {:.0}, instr min/mean/max {}/{:.1}/{}\n",
+            self.sil_mismatches,
+            self.link_errors,
+            self.link_timeouts,
+            self.over_budget_steps,
+            self.steps_per_wall_second,
+            self.step_instructions_min,
+            self.step_instructions_mean,
+            self.step_instructions_max
+        )
+    }
+}
+
 /// A controller of kind `C` stepped once per control period with the plant's sensor frame.
 pub trait StepController<C: FixedRate = Controller> {
     /// One control step.
@@ -96,5 +115,148 @@ impl<C: FixedRate> StepController<C> for Sil<C> {
             command,
             telemetry: self.controller.telemetry(),
         })
+    }
+}
+
+/// Control steps a controller answered in its safe state, by fault: the `safe_steps` and
+/// `faults` keys of every closed-loop system's summary (`#[serde(flatten)]` it in). Filled
+/// by [`Counted`], which every system steps its controller through.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct SafeSteps {
+    /// Control steps whose command was the safe state ([`Mode::Safe`]).
+    pub safe_steps: u64,
+    /// Those steps by fault code (`non_finite`, `out_of_range`, `stale`, `link_timeout`,
+    /// `overrun`); only the faults that occurred.
+    pub faults: BTreeMap<&'static str, u64>,
+    /// Control steps in all (not serialized: each summary has its own count).
+    #[serde(skip)]
+    pub steps: u64,
+}
+
+/// A fault code's name in the summary (snake_case, as in `dexter_core::protocol::Fault`).
+pub fn fault_name(f: Fault) -> &'static str {
+    match f {
+        Fault::None => "none",
+        Fault::NonFinite => "non_finite",
+        Fault::OutOfRange => "out_of_range",
+        Fault::Stale => "stale",
+        Fault::LinkTimeout => "link_timeout",
+        Fault::Overrun => "overrun",
+    }
+}
+
+impl SafeSteps {
+    /// Count one command.
+    pub fn record(&mut self, command: &impl Reply) {
+        self.steps += 1;
+        if command.mode() == Mode::Safe {
+            self.safe_steps += 1;
+            *self.faults.entry(fault_name(command.fault())).or_insert(0) += 1;
+        }
+    }
+
+    /// True if the controller answered more than half of its steps in the safe state (the
+    /// run then exits with status 1: `docs/scenes.md`, "Safe state").
+    pub fn mostly_safe(&self) -> bool {
+        2 * self.safe_steps > self.steps
+    }
+
+    /// The terminal warning for a run with safe steps (`None` without).
+    pub fn warning(&self) -> Option<String> {
+        (self.safe_steps > 0).then(|| {
+            let by: Vec<String> = self
+                .faults
+                .iter()
+                .map(|(k, n)| format!("{k} {n}"))
+                .collect();
+            format!(
+                "the controller was in its safe state for {} of {} control steps ({:.1} %; {})",
+                self.safe_steps,
+                self.steps,
+                100.0 * self.safe_steps as f64 / self.steps.max(1) as f64,
+                by.join(", ")
+            )
+        })
+    }
+
+    /// The safe-state lines of a text summary (empty without safe steps).
+    pub fn text(&self) -> String {
+        match self.safe_steps {
+            0 => String::new(),
+            n => {
+                let by: Vec<String> = self
+                    .faults
+                    .iter()
+                    .map(|(k, c)| format!("{k} {c}"))
+                    .collect();
+                format!(
+                    "safe state       {n} of {} control steps ({})\n",
+                    self.steps,
+                    by.join(", ")
+                )
+            }
+        }
+    }
+}
+
+/// A controller stepped through [`SafeSteps`]: every system with a controller steps it
+/// through this, so its safe-state steps are counted the same way in SIL and HIL.
+pub struct Counted<'a, C: FixedRate> {
+    inner: &'a mut dyn StepController<C>,
+    /// The counts so far.
+    pub safe: SafeSteps,
+}
+
+impl<'a, C: FixedRate> Counted<'a, C> {
+    /// Count the steps of `inner`.
+    pub fn new(inner: &'a mut dyn StepController<C>) -> Self {
+        Self {
+            inner,
+            safe: SafeSteps::default(),
+        }
+    }
+}
+
+impl<C: FixedRate> StepController<C> for Counted<'_, C> {
+    fn step(&mut self, frame: &C::Frame) -> Result<StepOutput<C::Command>, ControllerError> {
+        let out = self.inner.step(frame)?;
+        self.safe.record(&out.command);
+        Ok(out)
+    }
+    fn hil_report(&self) -> Option<HilReport> {
+        self.inner.hil_report()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dexter_core::protocol::ActuatorCommand;
+
+    #[test]
+    fn safe_steps_are_counted_by_fault() {
+        let mut s = SafeSteps::default();
+        let cmd = |mode, fault| ActuatorCommand {
+            mode,
+            fault,
+            ..ActuatorCommand::default()
+        };
+        s.record(&cmd(Mode::Track, Fault::None));
+        s.record(&cmd(Mode::Hold, Fault::None));
+        for _ in 0..3 {
+            s.record(&cmd(Mode::Safe, Fault::OutOfRange));
+        }
+        s.record(&cmd(Mode::Safe, Fault::Stale));
+        assert_eq!((s.steps, s.safe_steps), (6, 4));
+        assert_eq!(s.faults.get("out_of_range"), Some(&3));
+        assert_eq!(s.faults.get("stale"), Some(&1));
+        assert!(s.mostly_safe());
+        let json = serde_json::to_string(&s).unwrap();
+        assert_eq!(
+            json,
+            r#"{"safe_steps":4,"faults":{"out_of_range":3,"stale":1}}"#
+        );
+        assert!(s.warning().unwrap().contains("4 of 6"));
+        assert!(SafeSteps::default().warning().is_none());
     }
 }

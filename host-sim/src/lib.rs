@@ -11,6 +11,7 @@
 //! | [`scene`] | scene files read once, TOML errors with line and column, `--set`, key paths in errors |
 //! | [`sweep`] | sweep ranges and the parallel, order-keeping sweep engine |
 //! | [`output`] | output files written whole or not at all; the CSV number format; JSON |
+//! | [`period`] | the period a late orbit has provably settled to |
 //! | [`plot`] | SVG + PNG plots |
 //! | [`filmstrip`] | a motion as a grid of panels in one world window (arm, feeder, tilt table) |
 //! | [`stream`] | constant-memory views of a run: last values, decimated plot points |
@@ -34,6 +35,7 @@ pub mod filmstrip;
 pub mod hil;
 pub mod model;
 pub mod output;
+pub mod period;
 pub mod plot;
 pub mod progress;
 pub mod scene;

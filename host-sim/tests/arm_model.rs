@@ -137,6 +137,44 @@ fn roll_starts_exactly_when_the_centre_of_pressure_reaches_the_vertex() {
     assert!((g.force.tangential - roll.force.tangential).abs() < 1e-8);
 }
 
+#[test]
+fn roll_hand_cases_square_tipping_off_a_still_level_arm() {
+    // A square of side a = 0.1 m on a still, level arm, rho^2 = a^2 / 6. About a bottom
+    // vertex the centre of mass sits at d = (+-a/2, a/2); by hand (moments about the
+    // pivot): (rho^2 + |d|^2) phi'' = -d_x g, so phi'' = -+3 g / (4 a), the centre of mass
+    // accelerates phi'' J d = (+-3 g / 8, -3 g / 8), and the pivot pushes with
+    // f = (+-3 g / 8, 5 g / 8): to start the tip without slipping needs mu >= 3/5.
+    let r = rig(0.05);
+    let still = joint(0.0, 0.0, 0.0);
+    let a = 0.1;
+    for (dir, d_x) in [(1.0, 0.05f64), (-1.0, -0.05)] {
+        let pv = r.pivot(&AT, dir);
+        let roll = r.roll(&pv, 0.0, 0.0, &still);
+        let sign = d_x.signum();
+        assert!((roll.phi_accel_radps2 + sign * 3.0 * G / (4.0 * a)).abs() < 1e-9);
+        assert!((roll.psi_accel_radps2 - roll.phi_accel_radps2).abs() < 1e-12);
+        assert!(
+            (roll.force.tangential - sign * 3.0 * G / 8.0).abs() < 1e-9,
+            "dir {dir}"
+        );
+        assert!((roll.force.normal - 5.0 * G / 8.0).abs() < 1e-9);
+        assert!((roll.force.friction_ratio() - 0.6).abs() < 1e-9);
+        assert!(roll.force.in_cone(0.601) && !roll.force.in_cone(0.599));
+        // balanced on the vertex (psi = dir pi/4, centre of mass straight above it at
+        // a / sqrt 2) and spinning at w: no torque, f = g - w^2 a / sqrt 2 along the normal
+        for w in [0.0, 5.0, 20.0] {
+            let top = r.roll(&pv, dir * FRAC_PI_4, w, &still);
+            let h = a / 2f64.sqrt();
+            assert!(top.phi_accel_radps2.abs() < 1e-9);
+            assert!((top.force.normal - (G - w * w * h)).abs() < 1e-9, "w {w}");
+            assert!(top.force.tangential.abs() < 1e-9);
+        }
+        // spun fast enough the vertex would have to pull: no cone holds it
+        let fast = r.roll(&pv, dir * FRAC_PI_4, 20.0, &still);
+        assert!(!fast.force.in_cone(100.0));
+    }
+}
+
 /// A prescribed arm motion with analytic derivatives.
 fn arm(t: f64) -> Joint {
     // tilted past 45 degrees and swinging down: the square tips back over its lower vertex

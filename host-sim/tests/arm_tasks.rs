@@ -7,9 +7,9 @@ use dexter_sim::model::arm::motion::ArmMotion;
 use dexter_sim::model::arm::params::ArmConfig;
 use dexter_sim::model::arm::simulate::Executed;
 use dexter_sim::model::arm::summary::{run, ArmSummary, RunOptions};
-use dexter_sim::model::arm::{ArmError, ArmSystem};
+use dexter_sim::model::arm::{ArmError, ArmScene};
 
-fn system(text: &str) -> ArmSystem {
+fn system(text: &str) -> ArmScene {
     ArmConfig::from_toml_str(text).unwrap().validate().unwrap()
 }
 

@@ -13,7 +13,7 @@
 //! changed in the scratch directory: SVG, PNG, CSV) are compared with
 //! `host-sim/tests/documented/<command>.txt`. Files are compared by length and a 64-bit
 //! FNV-1a hash of their exact bytes (SVG text and PNG bytes are deterministic). Timings are
-//! masked: the numbers after `wall time`, `wall`, `"wall_time_s":`, `steps/s`,
+//! masked: the numbers after `wall time`, `wall`, `wall_time_s":` (any key ending so), `steps/s`,
 //! `"steps_per_wall_second":` and the HIL instruction counts; the scratch directory's path
 //! is shown as `<ROOT>`. Outputs longer than [`MAX_SHOWN_LINES`] lines are compared by
 //! hash, with their first and last lines shown.
@@ -177,7 +177,8 @@ fn fnv64(bytes: &[u8]) -> u64 {
 
 /// Markers after which a number is a timing (or, under HIL, an instruction count).
 const MASKED_AFTER: [&str; 7] = [
-    "\"wall_time_s\":",
+    // also `"planner_wall_time_s":` (the arm)
+    "wall_time_s\":",
     "wall time",
     "wall ",
     "steps/s",

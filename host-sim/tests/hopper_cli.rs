@@ -242,3 +242,175 @@ fn bad_values_and_unknown_keys_exit_2_naming_the_key() {
     );
     check(&["run", &s11, "--impacts", "0"], "hopper.cycles");
 }
+
+/// Eq. 19, E -> alpha E e^-E, and its slope.
+fn eq19(e: f64, alpha: f64) -> f64 {
+    alpha * e * (-e).exp()
+}
+fn eq19_slope(e: f64, alpha: f64) -> f64 {
+    alpha * (-e).exp() * (1.0 - e)
+}
+
+/// The alpha in (lo, hi) where the attracting period-`p` orbit of eq. 19 has multiplier -1
+/// (its doubling), by bisection; the orbit by a long transient and Newton on f^p(E) = E.
+/// f64 throughout, independent of dexter.
+fn eq19_doubling(p: usize, (mut lo, mut hi): (f64, f64)) -> f64 {
+    let multiplier = |alpha: f64| {
+        let mut e = 1.5;
+        for _ in 0..200_000 {
+            e = eq19(e, alpha);
+        }
+        let cycle = |e: f64| {
+            let (mut y, mut d) = (e, 1.0);
+            for _ in 0..p {
+                d *= eq19_slope(y, alpha);
+                y = eq19(y, alpha);
+            }
+            (y, d)
+        };
+        for _ in 0..50 {
+            let (y, d) = cycle(e);
+            e -= (y - e) / (d - 1.0);
+        }
+        cycle(e).1
+    };
+    for _ in 0..50 {
+        let mid = 0.5 * (lo + hi);
+        if multiplier(mid) > -1.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// `dexter sweep` of fig. 11 over the thrusts of `alphas` (alpha = tau chi_l / eta1) with
+/// `cycles` hops of transient: per value, the period column and the kept energies.
+fn swept_periods(alphas: (f64, f64, usize), cycles: usize) -> Vec<(String, Vec<f64>)> {
+    let tau = |a: f64| a * 5.81 / 0.5;
+    let range = format!(
+        "hopper.thrust_tau_mps2={}:{}:{}",
+        tau(alphas.0),
+        tau(alphas.1),
+        alphas.2
+    );
+    let cyc = format!("hopper.cycles={cycles}");
+    let csv = ok_stdout(&["sweep", &scene("11"), "--range", &range, "--set", &cyc]);
+    let mut out: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut last_value = String::new();
+    for l in csv.lines().skip(1) {
+        let c: Vec<&str> = l.split(',').collect();
+        if c[0] != last_value {
+            last_value = c[0].to_string();
+            out.push((c[2].to_string(), Vec::new()));
+        }
+        out.last_mut().unwrap().1.push(c[6].parse().unwrap());
+    }
+    out
+}
+
+/// Near each of the first three doublings of eq. 19 (alpha = e^2, then those of the period-2
+/// and period-4 orbits, located here by iterating the closed-form map), the hopper sweep
+/// reports a period only once the orbit has settled to it, and never the next one (the issue:
+/// period 4 just below the second doubling).
+#[test]
+fn sweep_reports_a_period_only_once_settled_near_each_doubling() {
+    let a1 = eq19_doubling(1, (5.0, 9.0));
+    let a2 = eq19_doubling(2, (a1 + 1e-6, 13.5));
+    let a3 = eq19_doubling(4, (a2 + 1e-6, 14.5));
+    let a4 = eq19_doubling(8, (a3 + 1e-6, 14.7));
+    println!("eq. 19 doublings: alpha = {a1:.9}, {a2:.9}, {a3:.9}, {a4:.9}");
+    assert!((a1 - E2).abs() < 1e-9);
+    // inside each window the period is the attractor's
+    for (a, want) in [
+        (5.0, "1"),
+        (0.5 * (a1 + a2), "2"),
+        (0.5 * (a2 + a3), "4"),
+        (0.5 * (a3 + a4), "8"),
+    ] {
+        let got = swept_periods((a, a, 1), 3000);
+        assert_eq!(got[0].0, want, "alpha {a}");
+    }
+    let naive = |e: &[f64]| {
+        let n = e.len();
+        (1..=12)
+            .find(|&p| (n - 4 * p..n).all(|i| (e[i] - e[i - p]).abs() <= 1e-8 * (1.0 + e[i].abs())))
+    };
+    let mut traps = 0;
+    for (k, ak) in [a1, a2, a3].into_iter().enumerate() {
+        let below = 1usize << k;
+        for (d, cycles) in [2e-3, 2e-4]
+            .map(|r| [300, 3000, 30_000, 100_000].map(|c| (r * ak, c)))
+            .concat()
+        {
+            let got = swept_periods((ak - d, ak + d, 2), cycles);
+            for ((period, e), want) in got.iter().zip([below, 2 * below]) {
+                println!(
+                    "alpha {ak:.5} {}: {cycles} hops: period {period:?}, naive {:?}",
+                    if want == below { "-" } else { "+" },
+                    naive(e)
+                );
+                assert!(
+                    period.is_empty() || *period == want.to_string(),
+                    "alpha {ak} +- {d}, {cycles} hops: {period}, want {want}"
+                );
+                traps += usize::from(naive(e).is_some_and(|q| q != want));
+            }
+        }
+    }
+    assert!(
+        traps >= 2,
+        "the cases include orbits a naive test gets wrong ({traps})"
+    );
+}
+
+/// No thrust: nothing drives the leg out of its first bottom. The run ends with that named
+/// (no_liftoff), not as a numerical failure (it was `non_finite`: an infinite
+/// decompression time).
+#[test]
+fn no_thrust_ends_in_no_liftoff() {
+    let v = json(&[
+        "run",
+        &scene("11"),
+        "--set",
+        "hopper.thrust_tau_mps2=0",
+        "--json",
+    ]);
+    for t in v["trajectories"].as_array().unwrap() {
+        assert_eq!(t["end"], "no_liftoff", "{t}");
+        assert_eq!(t["cycles"], 0);
+    }
+}
+
+/// Dense samples have a bound named with the key; at the bound a plotted run is bounded
+/// in work (sampling stops once the run's 200000 samples are stored).
+#[test]
+fn samples_per_phase_has_a_bound() {
+    let out = dexter(&[
+        "run",
+        &scene("11"),
+        "--set",
+        "hopper.samples_per_phase=1000000",
+        "--plot",
+        tmp("samples").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("hopper.samples_per_phase") && err.contains("<= 10000"),
+        "{err}"
+    );
+    let dir = tmp("samples-ok");
+    common::ok(&[
+        "run",
+        &scene("11"),
+        "--set",
+        "hopper.samples_per_phase=10000",
+        "--set",
+        "hopper.cycles=2000",
+        "--plot",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(dir.join("hopper-fig11-phase.svg").is_file());
+}

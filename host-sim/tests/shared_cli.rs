@@ -326,3 +326,40 @@ fn sweeps_on_one_core_and_on_all_agree_byte_for_byte() {
         assert!(serial.0.lines().count() > 10, "{a:?}");
     }
 }
+
+/// The peak resident memory of `dexter args`, KiB (wait4's rusage of that child alone).
+// the child is waited for by wait4 itself, which std's Child cannot do with rusage
+#[allow(clippy::zombie_processes)]
+fn peak_rss_kib(args: &[&str]) -> i64 {
+    let child = Command::new(env!("CARGO_BIN_EXE_dexter"))
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let pid = child.id() as libc::pid_t;
+    let mut status = 0;
+    // SAFETY: an all-zero rusage is a valid value for wait4 to fill in
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: `pid` is our own child, not yet waited for; status and usage are valid
+    let waited = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
+    assert_eq!(waited, pid, "wait4 on {args:?}");
+    assert!(
+        libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0,
+        "{args:?} failed"
+    );
+    usage.ru_maxrss
+}
+
+/// A run of a thousand times more events keeps the same memory, for every system (the
+/// planar body used to keep every impact: about 160 MB for a million).
+#[test]
+fn a_run_of_any_length_keeps_constant_memory() {
+    for name in ["line-juggler-ideal", "planar-triangle", "hopper-fig11"] {
+        let s = scene(name);
+        let short = peak_rss_kib(&["run", &s, "--impacts", "1000"]);
+        let long = peak_rss_kib(&["run", &s, "--impacts", "1000000"]);
+        println!("{name}: peak RSS {short} KiB for 1e3 events, {long} KiB for 1e6");
+        assert!(long <= short + 4096, "{name}: {short} KiB -> {long} KiB");
+    }
+}

@@ -46,20 +46,53 @@ pub struct SplineSample<R> {
 /// duration `segment_s` (s, > 0) at time `t_s` (s). Times outside `[0, T]` are clamped to
 /// the nearest end (the end's position, velocity and acceleration). `None` if there are
 /// fewer than [`MIN_KNOTS`] points, `segment_s` is not > 0, or `t_s` is NaN.
-pub fn sample<R: Real>(points_rad: &[R], segment_s: R, t_s: R) -> Option<SplineSample<R>> {
+pub fn sample<R: SegmentIndex>(points_rad: &[R], segment_s: R, t_s: R) -> Option<SplineSample<R>> {
     let segments = points_rad.len().checked_sub(3).filter(|&s| s >= 1)?;
     // written so that NaN fails: `segment_s > 0` and `t_s` comparable
     let valid = segment_s > R::ZERO && t_s.partial_cmp(&t_s).is_some();
     if !valid {
         return None;
     }
-    let u = (t_s / segment_s).clamp_r(R::ZERO, R::of(segments as f64));
+    let u = (t_s / segment_s).clamp_r(R::ZERO, R::of_index(segments));
     // u >= 0 and finite here, so the cast truncates toward zero: floor(u)
-    let j = (u.to_f64() as usize).min(segments - 1);
-    let s = u - R::of(j as f64);
+    let j = u.floor_index().min(segments - 1);
+    let s = u - R::of_index(j);
     let p = points_rad.get(j..j + 4)?;
     let (p0, p1, p2, p3) = (p[0], p[1], p[2], p[3]);
     Some(basis(s, [p0, p1, p2, p3], segment_s))
+}
+
+/// The conversions between a spline parameter and a segment index, done in the scalar's
+/// own precision: on the target an `f32` converts to and from an index with one FPU
+/// instruction (`vcvt`), where a detour through `f64` would pull in software
+/// double-precision routines (about 0.5 KB of flash on a Cortex-M4F, and their cycles).
+pub trait SegmentIndex: Real {
+    /// `floor(self)` as an index, for finite `self >= 0` (saturating; NaN gives 0).
+    fn floor_index(self) -> usize;
+    /// The index as a scalar (exact below 2^24 for `f32`; segments are at most 13).
+    fn of_index(index: usize) -> Self;
+}
+
+impl SegmentIndex for f32 {
+    #[inline]
+    fn floor_index(self) -> usize {
+        self as usize
+    }
+    #[inline]
+    fn of_index(index: usize) -> Self {
+        index as f32
+    }
+}
+
+impl SegmentIndex for f64 {
+    #[inline]
+    fn floor_index(self) -> usize {
+        self as usize
+    }
+    #[inline]
+    fn of_index(index: usize) -> Self {
+        index as f64
+    }
 }
 
 /// The segment polynomials above at local parameter `s` in `[0, 1]`.

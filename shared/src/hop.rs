@@ -119,6 +119,26 @@ impl<R: Real> EnergyServoThrust<R> {
         self.target_energy_jpkg
     }
 
+    /// tau0, m/s^2.
+    pub fn nominal_thrust_mps2(&self) -> R {
+        self.nominal_thrust_mps2
+    }
+
+    /// k_E, 1/m.
+    pub fn gain_per_m(&self) -> R {
+        self.gain_per_m
+    }
+
+    /// tau_max, m/s^2.
+    pub fn max_thrust_mps2(&self) -> R {
+        self.max_thrust_mps2
+    }
+
+    /// delta, s.
+    pub fn duration_s(&self) -> R {
+        self.duration_s
+    }
+
     /// The thrust for a stance that began with touchdown energy `touchdown_energy_jpkg`,
     /// m/s^2: `clamp(tau0 + k_E (E* - E_n), 0, tau_max)`; NaN energy gives 0.
     #[inline]
@@ -138,8 +158,9 @@ impl<R: Real> EnergyServoThrust<R> {
     }
 }
 
-/// Phase of the hop cycle (sec. 3.1, eq. 8).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Phase of the hop cycle (sec. 3.1, eq. 8). Serializable: the fixed-rate hopper controller
+/// ([`crate::hop_control`]) reports its detected phase in every command.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum StancePhase {
     /// Leg extended, off the ground; ends at touchdown.

@@ -17,11 +17,13 @@
 //! | [`tilt`] | kappa-tilt law, table-velocity energy feedback, stability limits | Zumel & Erdmann, eq. 3–4, 11, 16, 22–26 |
 //! | [`planar`] | planar juggler mirror law and the modified, solvable law | Rizzi & Koditschek 1994, eq. 11–16 |
 //! | [`hop`] | Raibert's fixed thrust and an energy-servo thrust | Koditschek & Bühler 1991, sec. 1.2, 3.1 |
+//! | [`hop_control`] | the fixed-rate hopper thrust controller: phases from sampled leg compression, valve timing, safe state | Koditschek & Bühler 1991, sec. 3.1, eq. 8/10 |
 //! | [`estimate`] | fixed-rate ball-state estimator with impact re-initialisation | — |
 //! | [`track`] | paddle tracking: PD plus feed-forward within limits | — |
 //! | [`fixed_rate`] | the one shape of every controller: [`FixedRate`](fixed_rate::FixedRate) and [`Reply`](fixed_rate::Reply) | — |
 //! | [`control`] | the fixed-rate line-juggler [`Controller`](control::Controller) and its safe state | — |
 //! | [`echo`] | the link check [`Echo`](echo::Echo): a controller with no plant, for links and HIL tests | — |
+//! | [`tilt_control`] | the fixed-rate kappa-tilt [`TiltController`](tilt_control::TiltController): camera flight estimate, eq. 7 contact, eq. 25 table velocity, table tracking | Zumel & Erdmann eq. 2, 7, 21, 25 |
 //! | [`protocol`] | wire types of every controller kind ([`Wire`](protocol::Wire)), postcard + CRC + COBS framing, typed decode errors | — |
 #![cfg_attr(not(test), no_std)]
 #![warn(missing_docs)]
@@ -35,6 +37,7 @@ pub mod echo;
 pub mod estimate;
 pub mod fixed_rate;
 pub mod hop;
+pub mod hop_control;
 pub mod math;
 pub mod mirror;
 pub mod params;
@@ -42,6 +45,7 @@ pub mod planar;
 pub mod protocol;
 pub mod state;
 pub mod tilt;
+pub mod tilt_control;
 pub mod track;
 
 /// Standard gravity, m/s^2 (the default for scenes and controllers).

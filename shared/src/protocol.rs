@@ -189,9 +189,11 @@ pub trait Wire: FixedRate {
 /// Declares the controller kinds: for each `Name => Controller` line, a [`Kind`] variant,
 /// the [`Config`], [`Frame`] and [`Command`] variants carrying `Controller`'s
 /// `FixedRate::{Params, Frame, Command}`, and `impl Wire for Controller`. The order of the
-/// lines is the wire tag of every variant: append, never reorder.
+/// lines is the wire tag of every variant: append, never reorder. A line
+/// `Name if (<cfg predicate>) => Controller` puts its kind's values on the wire only where the predicate holds
+/// ([`Kind`] always lists it); such lines come last, so the tags before them never move.
 macro_rules! controller_kinds {
-    ($($(#[$doc:meta])* $kind:ident => $controller:ty),+ $(,)?) => {
+    ($($(#[$doc:meta])* $kind:ident $(if ($cfg:meta))? => $controller:ty),+ $(,)?) => {
         /// Which controller a configuration, frame or command is for.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
         #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -207,61 +209,77 @@ macro_rules! controller_kinds {
         /// A controller kind and its parameters ([`HostMessage::Configure`]).
         #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
         pub enum Config {
-            $($(#[$doc])* $kind(<$controller as FixedRate>::Params),)+
+            $($(#[$doc])* #[cfg(all($($cfg)?))] $kind(<$controller as FixedRate>::Params),)+
         }
 
         /// One sample of the plant for a controller kind ([`HostMessage::Sensor`]).
         #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
         pub enum Frame {
-            $($(#[$doc])* $kind(<$controller as FixedRate>::Frame),)+
+            $($(#[$doc])* #[cfg(all($($cfg)?))] $kind(<$controller as FixedRate>::Frame),)+
         }
 
         /// One control period's output of a controller kind ([`DeviceMessage::Output`]).
         #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
         pub enum Command {
-            $($(#[$doc])* $kind(<$controller as FixedRate>::Command),)+
+            $($(#[$doc])* #[cfg(all($($cfg)?))] $kind(<$controller as FixedRate>::Command),)+
         }
 
         impl Config {
             /// The kind this configuration is for.
             pub fn kind(&self) -> Kind {
-                match self { $(Config::$kind(_) => Kind::$kind,)+ }
+                match self { $(#[cfg(all($($cfg)?))] Config::$kind(_) => Kind::$kind,)+ }
             }
-            /// The default parameters of `kind` (tests and size checks).
-            pub fn default_for(kind: Kind) -> Config {
-                match kind { $(Kind::$kind => Config::$kind(Default::default()),)+ }
+            /// The default parameters of `kind` (tests and size checks); `None` for a kind
+            /// this build leaves off the wire.
+            #[allow(unreachable_patterns)] // every kind on the wire
+            pub fn default_for(kind: Kind) -> Option<Config> {
+                match kind {
+                    $(#[cfg(all($($cfg)?))] Kind::$kind => Some(Config::$kind(Default::default())),)+
+                    _ => None,
+                }
             }
         }
 
         impl Frame {
             /// The kind this frame is for.
             pub fn kind(&self) -> Kind {
-                match self { $(Frame::$kind(_) => Kind::$kind,)+ }
+                match self { $(#[cfg(all($($cfg)?))] Frame::$kind(_) => Kind::$kind,)+ }
             }
-            /// A default (all-zero) frame of `kind` (tests and size checks).
-            pub fn default_for(kind: Kind) -> Frame {
-                match kind { $(Kind::$kind => Frame::$kind(Default::default()),)+ }
+            /// A default (all-zero) frame of `kind` (tests and size checks); `None` for a kind
+            /// this build leaves off the wire.
+            #[allow(unreachable_patterns)] // every kind on the wire
+            pub fn default_for(kind: Kind) -> Option<Frame> {
+                match kind {
+                    $(#[cfg(all($($cfg)?))] Kind::$kind => Some(Frame::$kind(Default::default())),)+
+                    _ => None,
+                }
             }
         }
 
         impl Command {
             /// The kind this command is from.
             pub fn kind(&self) -> Kind {
-                match self { $(Command::$kind(_) => Kind::$kind,)+ }
+                match self { $(#[cfg(all($($cfg)?))] Command::$kind(_) => Kind::$kind,)+ }
             }
-            /// A default command of `kind` (tests and size checks).
-            pub fn default_for(kind: Kind) -> Command {
-                match kind { $(Kind::$kind => Command::$kind(Default::default()),)+ }
+            /// A default command of `kind` (tests and size checks); `None` for a kind this
+            /// build leaves off the wire.
+            #[allow(unreachable_patterns)] // every kind on the wire
+            pub fn default_for(kind: Kind) -> Option<Command> {
+                match kind {
+                    $(#[cfg(all($($cfg)?))] Kind::$kind => Some(Command::$kind(Default::default())),)+
+                    _ => None,
+                }
             }
             /// The command's sequence number, mode and fault, whatever its kind.
             pub fn reply(&self) -> (u32, Mode, Fault) {
                 use crate::fixed_rate::Reply;
-                match self { $(Command::$kind(c) => (c.seq(), c.mode(), c.fault()),)+ }
+                match self { $(#[cfg(all($($cfg)?))] Command::$kind(c) => (c.seq(), c.mode(), c.fault()),)+ }
             }
         }
 
         $(
             #[allow(unreachable_patterns)] // a build with a single kind
+            #[cfg(all($($cfg)?))]
             impl Wire for $controller {
                 const KIND: Kind = Kind::$kind;
                 fn config(params: Self::Params) -> Config {
@@ -292,19 +310,127 @@ controller_kinds! {
     Line => crate::control::Controller,
     /// The link check: echoes a scaled value, no actuator ([`crate::echo::Echo`]).
     Echo => crate::echo::Echo,
+    /// The kappa-tilt table with energy feedback ([`crate::tilt_control::TiltController`]).
+    Tilt => crate::tilt_control::TiltController,
+    /// The hopper's thrust valve ([`crate::hop_control::HopController`]).
+    Hop => crate::hop_control::HopController,
+    /// The one-joint arm: a planned B-spline tracked with torque limits ([`crate::arm_control::ArmController`]).
+    /// Its parameters, frames and commands are on the wire of every host build, and of a
+    /// bare-metal build only with the feature `wire-arm` (a firmware image that hosts the
+    /// arm): the wire tags of the kinds before it do not depend on it, and an image without
+    /// it still names the kind (`Rejection::NotHosted(Kind::Arm)`), with no code for it.
+    Arm if (any(not(target_os = "none"), feature = "wire-arm")) => crate::arm_control::ArmController,
 }
 
 /// A message from the plant side (host) to the controller (firmware).
+pub type HostMessage = HostMessageOf<Config, Frame>;
+
+/// [`HostMessage`] with the types `Configure` and `Sensor` carry as parameters. The wire
+/// form is the same for any `C`, `F` whose postcard forms are [`Config`]'s and [`Frame`]'s:
+/// a firmware image decodes `HostMessageOf<Partial<P>, Partial<F>>`, which decodes the
+/// parameters and frames of the kinds it hosts only ([`Partial`]), so a kind it leaves out
+/// costs it no decoder.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub enum HostMessage {
+pub enum HostMessageOf<C, F> {
     /// (Re)configure the controller; answered with [`DeviceMessage::Configured`].
-    Configure(Config),
+    Configure(C),
     /// A sensor sample; answered with [`DeviceMessage::Output`] (or
     /// [`DeviceMessage::Rejected`] if no controller of its kind is configured).
-    Sensor(Frame),
+    Sensor(F),
     /// Ask the firmware to end the run: it answers [`DeviceMessage::Stopped`] and exits the
     /// emulator with success.
     Stop,
+}
+
+/// The hosted part of a kind-indexed enum ([`Config`] or [`Frame`]) of a firmware image:
+/// one variant per kind it hosts, in any order, decoded by [`Partial`].
+pub trait HostedKinds: Sized {
+    /// The kind of this value.
+    fn kind(&self) -> Kind;
+    /// If `kind` is hosted, its value decoded from `body` (`Ok(Ok(..))`, or the decoder's
+    /// error); else `body` handed back undecoded (`Ok(Err(body))`).
+    fn decode<'de, A: serde::de::VariantAccess<'de>>(
+        kind: Kind,
+        body: A,
+    ) -> Result<Result<Self, A>, A::Error>;
+}
+
+/// A [`Config`] or [`Frame`] as an image that hosts the kinds of `T` decodes it: the value
+/// of a hosted kind, or only the kind of one it does not host (the rest of the message
+/// skipped undecoded, so the image holds no decoder for it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Partial<T> {
+    /// A hosted kind's value.
+    Hosted(T),
+    /// A kind this image does not host.
+    NotHosted(Kind),
+}
+
+impl<T: HostedKinds> Partial<T> {
+    /// The kind named on the wire, hosted or not.
+    pub fn kind(&self) -> Kind {
+        match self {
+            Partial::Hosted(t) => t.kind(),
+            Partial::NotHosted(kind) => *kind,
+        }
+    }
+}
+
+impl<'de, T: HostedKinds> Deserialize<'de> for Partial<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_enum("Partial", &[], PartialVisitor(core::marker::PhantomData))
+    }
+}
+
+struct PartialVisitor<T>(core::marker::PhantomData<T>);
+
+impl<'de, T: HostedKinds> serde::de::Visitor<'de> for PartialVisitor<T> {
+    type Value = Partial<T>;
+
+    fn expecting(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("a controller kind and its value")
+    }
+
+    fn visit_enum<A: serde::de::EnumAccess<'de>>(self, data: A) -> Result<Self::Value, A::Error> {
+        use serde::de::{Error, Unexpected, VariantAccess};
+        let (index, body) = data.variant::<u32>()?;
+        let kind = Kind::ALL
+            .get(index as usize)
+            .copied()
+            .ok_or_else(|| A::Error::invalid_value(Unexpected::Unsigned(index.into()), &self))?;
+        match T::decode(kind, body)? {
+            Ok(value) => Ok(Partial::Hosted(value)),
+            Err(body) => body
+                .newtype_variant_seed(SkipRest)
+                .map(|()| Partial::NotHosted(kind)),
+        }
+    }
+}
+
+/// Consumes the rest of a postcard message as single bytes (the undecoded parameters of
+/// a kind not hosted are the message's last field: `Configure`'s or `Sensor`'s), so the decode ends at its end.
+struct SkipRest;
+
+impl<'de> serde::de::DeserializeSeed<'de> for SkipRest {
+    type Value = ();
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_tuple(MAX_PAYLOAD_LEN, SkipRest)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for SkipRest {
+    type Value = ();
+
+    fn expecting(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("the rest of the message")
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        // postcard reads a byte per element and reports the end of the input as an error
+        // without moving: the loop stops there, with every byte consumed.
+        while let Ok(Some(_)) = seq.next_element::<u8>() {}
+        Ok(())
+    }
 }
 
 /// Why the firmware refused to step a frame (a protocol error of the host, or a firmware
@@ -686,12 +812,124 @@ mod tests {
         let echo = <Echo as Wire>::frame(EchoFrame { seq: 1, value: 2.0 });
         assert_eq!(echo.kind(), Kind::Echo);
         assert_eq!(<Controller as Wire>::frame_of(&echo), None);
-        let cmd = Command::default_for(Kind::Echo);
+        let cmd = Command::default_for(Kind::Echo).unwrap();
         assert_eq!(<Controller as Wire>::command_of(&cmd), None);
         assert!(<Echo as Wire>::command_of(&cmd).is_some());
-        let config = Config::default_for(Kind::Line);
+        let config = Config::default_for(Kind::Line).unwrap();
         assert!(<Controller as Wire>::params_of(&config).is_some());
         assert!(<Echo as Wire>::params_of(&config).is_none());
-        assert_eq!(Kind::ALL, &[Kind::Line, Kind::Echo]);
+        assert_eq!(
+            Kind::ALL,
+            &[Kind::Line, Kind::Echo, Kind::Tilt, Kind::Hop, Kind::Arm]
+        );
+    }
+
+    /// An image that hosts the line juggler and the arm only (as a firmware image's
+    /// `HostedKinds` would be generated).
+    #[derive(Debug, PartialEq)]
+    enum LineAndArm {
+        Line(<crate::control::Controller as FixedRate>::Params),
+        Arm(<crate::arm_control::ArmController as FixedRate>::Params),
+    }
+
+    impl HostedKinds for LineAndArm {
+        fn kind(&self) -> Kind {
+            match self {
+                LineAndArm::Line(_) => Kind::Line,
+                LineAndArm::Arm(_) => Kind::Arm,
+            }
+        }
+        fn decode<'de, A: serde::de::VariantAccess<'de>>(
+            kind: Kind,
+            body: A,
+        ) -> Result<Result<Self, A>, A::Error> {
+            Ok(match kind {
+                Kind::Line => Ok(LineAndArm::Line(body.newtype_variant()?)),
+                Kind::Arm => Ok(LineAndArm::Arm(body.newtype_variant()?)),
+                _ => Err(body),
+            })
+        }
+    }
+
+    /// A host message as the line-and-arm image decodes it.
+    type Decoded = HostMessageOf<Partial<LineAndArm>, Partial<EchoOnly>>;
+
+    /// Frames of an image that hosts the link check only.
+    #[derive(Debug, PartialEq)]
+    struct EchoOnly(crate::echo::EchoFrame);
+
+    impl HostedKinds for EchoOnly {
+        fn kind(&self) -> Kind {
+            Kind::Echo
+        }
+        fn decode<'de, A: serde::de::VariantAccess<'de>>(
+            kind: Kind,
+            body: A,
+        ) -> Result<Result<Self, A>, A::Error> {
+            Ok(match kind {
+                Kind::Echo => Ok(EchoOnly(body.newtype_variant()?)),
+                _ => Err(body),
+            })
+        }
+    }
+
+    /// Every host message through the encoder and a partial image's decoder.
+    fn partial(message: &HostMessage) -> Result<Decoded, DecodeError> {
+        let mut out = [0u8; MAX_FRAME_LEN];
+        let n = encode(message, &mut out).unwrap();
+        let mut dec = FrameDecoder::<MAX_FRAME_LEN>::new();
+        out[..n]
+            .iter()
+            .fold(None, |last, &b| dec.push(b).or(last))
+            .expect("one frame")
+    }
+
+    #[test]
+    fn an_image_decodes_the_parameters_of_its_kinds_and_only_the_kind_of_the_others() {
+        let mut arm = <crate::arm_control::ArmController as FixedRate>::Params::default();
+        arm.trajectory.points_rad[3] = -0.25;
+        let line = <crate::control::Controller as FixedRate>::Params::default();
+        for kind in Kind::ALL.iter().copied() {
+            let config = match kind {
+                Kind::Arm => Config::Arm(arm),
+                _ => Config::default_for(kind).unwrap(),
+            };
+            let expected = match config {
+                Config::Line(p) => Partial::Hosted(LineAndArm::Line(p)),
+                Config::Arm(p) => Partial::Hosted(LineAndArm::Arm(p)),
+                _ => Partial::NotHosted(kind),
+            };
+            let got = partial(&HostMessage::Configure(config));
+            assert_eq!(got, Ok(HostMessageOf::Configure(expected)), "{kind:?}");
+        }
+        assert!(matches!(
+            partial(&HostMessage::Configure(Config::Line(line))),
+            Ok(HostMessageOf::Configure(Partial::Hosted(LineAndArm::Line(p)))) if p == line
+        ));
+        assert_eq!(
+            partial(&sensor()),
+            Ok(HostMessageOf::Sensor(Partial::NotHosted(Kind::Line)))
+        );
+        let echo = crate::echo::EchoFrame {
+            seq: 3,
+            value: -1.5,
+        };
+        assert_eq!(
+            partial(&HostMessage::Sensor(Frame::Echo(echo))),
+            Ok(HostMessageOf::Sensor(Partial::Hosted(EchoOnly(echo))))
+        );
+        assert_eq!(partial(&HostMessage::Stop), Ok(HostMessageOf::Stop));
+    }
+
+    #[test]
+    fn a_kind_index_past_the_list_is_a_payload_error() {
+        // Configure (0), kind index = the number of kinds, no parameters; CRC appended.
+        let payload = [0u8, Kind::ALL.len() as u8];
+        let mut raw = [0u8; 6];
+        raw[..2].copy_from_slice(&payload);
+        raw[2..].copy_from_slice(&CRC32C.checksum(&payload).to_le_bytes());
+        let mut out = [0u8; 16];
+        let n = cobs::try_encode(&raw, &mut out).unwrap();
+        assert_eq!(decode::<Decoded>(&mut out[..n]), Err(DecodeError::Payload));
     }
 }

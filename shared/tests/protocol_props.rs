@@ -26,7 +26,8 @@ fn fault() -> impl Strategy<Value = Fault> {
         Just(Fault::NonFinite),
         Just(Fault::OutOfRange),
         Just(Fault::Stale),
-        Just(Fault::LinkTimeout)
+        Just(Fault::LinkTimeout),
+        Just(Fault::Overrun)
     ]
 }
 
@@ -477,11 +478,15 @@ fn every_message_shape() -> (Vec<HostMessage>, Vec<DeviceMessage>) {
     let mut host = vec![HostMessage::Stop];
     let mut device = vec![DeviceMessage::Rejected(Rejection::NotConfigured)];
     for &kind in Kind::ALL {
-        host.push(HostMessage::Configure(Config::default_for(kind)));
-        host.push(HostMessage::Sensor(Frame::default_for(kind)));
+        host.push(HostMessage::Configure(
+            Config::default_for(kind).expect("every kind is on the host's wire"),
+        ));
+        host.push(HostMessage::Sensor(
+            Frame::default_for(kind).expect("every kind is on the host's wire"),
+        ));
         device.push(DeviceMessage::Configured { kind, ok: true });
         device.push(DeviceMessage::Output {
-            command: Command::default_for(kind),
+            command: Command::default_for(kind).expect("every kind is on the host's wire"),
             telemetry: Telemetry::default(),
         });
         device.push(DeviceMessage::Rejected(Rejection::NotHosted(kind)));
@@ -546,9 +551,17 @@ fn the_worst_case_counter_matches_postcard_at_the_extremes() {
     };
     let actual = postcard::to_allocvec(&extreme).unwrap().len();
     assert_eq!(worst_case::size(&extreme).unwrap(), actual);
-    let small = postcard::to_allocvec(&Command::default_for(Kind::Line))
+    let small = postcard::to_allocvec(
+        &Command::default_for(Kind::Line).expect("every kind is on the host's wire"),
+    )
+    .unwrap()
+    .len();
+    assert!(
+        worst_case::size(
+            &Command::default_for(Kind::Line).expect("every kind is on the host's wire")
+        )
         .unwrap()
-        .len();
-    assert!(worst_case::size(&Command::default_for(Kind::Line)).unwrap() > small);
+            > small
+    );
     assert!(worst_case::size(&Some(1u8)).is_err());
 }

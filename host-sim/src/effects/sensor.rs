@@ -52,8 +52,9 @@ pub struct SampledSensor {
     latest: Option<(u32, f32)>,
 }
 
-/// Most samples in flight (delivered later); older ones are dropped.
-const MAX_PENDING: usize = 4096;
+/// Most samples in flight (taken, not yet delivered): the validator refuses a
+/// `sensor.latency_s` x `sensor.rate_hz` above it, so none is ever dropped.
+pub const MAX_PENDING: usize = 4096;
 
 impl SampledSensor {
     /// A sensor sampling at `rate_hz` (> 0) with noise `sigma_m` (m), latency `latency_s`

@@ -131,8 +131,9 @@ impl<C: Wire> LockStep<C> {
                  (the host accepted them: is the firmware built from this source?)"
             ))),
             DeviceMessage::Rejected(Rejection::NotHosted(_)) => Err(link_err(format!(
-                "this firmware image does not host the {kind:?} controller \
-                 (firmware/src/hosted.rs); rebuild it with `cargo fw-build`"
+                "this firmware image does not host the {kind:?} controller: its cargo \
+                 features select the hosted kinds (firmware/README.md, \"Images\"; the \
+                 arm's image: `--no-default-features --features arm`)"
             ))),
             DeviceMessage::Rejected(Rejection::Undecodable(e)) => Err(link_err(format!(
                 "the firmware could not decode Configure for the {kind:?} controller ({e}): \

@@ -86,6 +86,30 @@ pub fn build_firmware() -> Result<PathBuf, ControllerError> {
 /// [`build_firmware`] with cargo features of `dexter-firmware` (e.g. `fast-math`, `bench`);
 /// the ELF is written to the same path.
 pub fn build_firmware_with_features(features: &[&str]) -> Result<PathBuf, ControllerError> {
+    cargo_build_firmware(features, true)
+}
+
+/// An image with its own selection of hosted kinds (`dexter-firmware` built with
+/// `--no-default-features --features <features>`, e.g. `["arm"]`: firmware/README.md,
+/// "Images"), copied beside the default ELF as `dexter-firmware-<name>.elf`, so that a
+/// later build of another image does not replace it; returns the copy's path.
+pub fn build_firmware_image(name: &str, features: &[&str]) -> Result<PathBuf, ControllerError> {
+    let elf = cargo_build_firmware(features, false)?;
+    let copy = elf.with_file_name(format!("dexter-firmware-{name}.elf"));
+    std::fs::copy(&elf, &copy).map_err(|e| {
+        link_err(format!(
+            "cannot copy the {name} image {} to {}: {e}",
+            elf.display(),
+            copy.display()
+        ))
+    })?;
+    Ok(copy)
+}
+
+fn cargo_build_firmware(
+    features: &[&str],
+    default_features: bool,
+) -> Result<PathBuf, ControllerError> {
     check_toolchain()?;
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
@@ -97,6 +121,9 @@ pub fn build_firmware_with_features(features: &[&str]) -> Result<PathBuf, Contro
         "--target",
         TARGET,
     ]);
+    if !default_features {
+        cmd.arg("--no-default-features");
+    }
     if !features.is_empty() {
         cmd.args(["--features", &features.join(",")]);
     }

@@ -3,7 +3,9 @@
 //!
 //! | system | scene table | what |
 //! | --- | --- | --- |
+//! | [`arm`] | `[arm]` or `[task]` | Akella, Huang, Lynch & Mason's one-joint arm: snatch, throw, roll, rolling throw, planned and tracked |
 //! | [`feeder`] | `[feeder]` | Akella, Huang, Lynch & Mason's 1JOC parts feeder: plan, simulated feed, fraction fed |
+//! | [`hopper::sampled`] | `[hopper]` with `[hopper.control]` | the hopper's thrust valve switched by the core's fixed-rate controller (SIL, `--hil`) |
 //! | [`hopper`] | `[hopper]` | Koditschek & Bühler's vertical hopper: return maps, period doubling |
 //! | [`planar_juggler`] | `[planar_juggler]` | Rizzi & Koditschek's planar juggler, mirror law eq. 12 or the modified law eq. 15 |
 //! | [`planar`] | `[planar]` | Zumel & Erdmann's bouncing body on the kappa-tilt table |
@@ -11,13 +13,14 @@
 //!
 //! How to add one: `docs/adding-a-system.md`.
 
+pub mod arm;
 pub mod feeder;
 pub mod hopper;
 pub mod line;
 pub mod planar;
 pub mod planar_juggler;
 
-use crate::controller::{HilReport, StepController};
+use crate::controller::{HilReport, SafeSteps, StepController};
 use crate::external::OnTarget;
 use crate::output::TraceRow;
 use crate::scene::{SceneError, SceneFile};
@@ -134,6 +137,18 @@ pub trait Outcome {
     fn attach_hil(&mut self, report: HilReport) {
         let _ = report;
     }
+    /// The controller's safe-state steps, for a system that closes its loop through one
+    /// (stepped through [`crate::controller::Counted`]): `run` warns on the terminal when
+    /// there are any, and exits with status 1 when they are more than half of the steps.
+    fn safe_steps(&self) -> Option<&SafeSteps> {
+        None
+    }
+    /// Why the run stopped before doing what was asked for a reason other than the
+    /// system's physics (an internal cap, a non-finite state), as the summary names it:
+    /// `run` prints the summary, then this as the error, and exits with status 1.
+    fn shortfall(&self) -> Option<String> {
+        None
+    }
 }
 
 /// The `--plot` pictures of a run of `S`: what they keep of the rows (bounded: decimated
@@ -216,7 +231,9 @@ impl<S: System> Dispatch for S {
 
 /// Every system, in the order they are asked to claim a scene: the line system last (it
 /// claims every scene, so it runs those no other system claims).
-pub static SYSTEMS: [&dyn Dispatch; 5] = [
+pub static SYSTEMS: [&dyn Dispatch; 7] = [
+    &arm::ArmSystem,
+    &hopper::sampled::SampledHopperSystem,
     &feeder::FeederSystem,
     &hopper::HopperSystem,
     &planar_juggler::PlanarJugglerSystem,

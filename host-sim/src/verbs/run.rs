@@ -80,7 +80,27 @@ pub fn run<S: System>(file: &SceneFile, req: &RunRequest) -> Result<(), Failure>
             eprintln!("wrote {}", f.display());
         }
     }
-    print_result(req.json, || outcome.text(), || outcome.json())
+    print_result(req.json, || outcome.text(), || outcome.json())?;
+    verdict(&outcome)
+}
+
+/// The exit status of a run whose summary was printed: a controller mostly in its safe
+/// state, or a run cut short, is a failure (after a warning for any safe state).
+fn verdict(outcome: &impl Outcome) -> Result<(), Failure> {
+    if let Some(safe) = outcome.safe_steps() {
+        if let Some(w) = safe.warning() {
+            eprintln!("warning: {w}");
+        }
+        if safe.mostly_safe() {
+            return Err(Failure::run(
+                "the controller spent more than half of the run in its safe state",
+            ));
+        }
+    }
+    match outcome.shortfall() {
+        Some(why) => Err(Failure::run(format!("the run stopped early: {why}"))),
+        None => Ok(()),
+    }
 }
 
 /// The run with the system's controller on the target (`--hil`).

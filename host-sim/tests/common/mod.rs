@@ -2,7 +2,9 @@
 //! directories.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+pub mod svg;
+
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Run the `dexter` binary with `args`.
@@ -46,4 +48,22 @@ pub fn scratch(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// The columns of a CSV file with a header: each row as a map from column name to value
+/// (numbers parsed; a non-number is NaN).
+pub fn csv_rows(path: &Path) -> Vec<std::collections::HashMap<String, f64>> {
+    let text = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .zip(l.split(','))
+                .map(|(k, v)| (k.to_string(), v.parse().unwrap_or(f64::NAN)))
+                .collect()
+        })
+        .collect()
 }

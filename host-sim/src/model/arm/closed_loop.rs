@@ -15,7 +15,7 @@ use super::contact::Joint;
 use super::motion::ArmMotion;
 use super::planner::Plan;
 use super::simulate::{execute, Executed, GoalError};
-use super::{ArmError, ArmSystem};
+use super::{ArmError, ArmScene};
 use crate::controller::{Sil, StepController};
 use dexter_core::arm_control::{ArmController, ArmFrame};
 use dexter_core::protocol::{Fault, Mode};
@@ -141,7 +141,7 @@ pub struct TrackingReport {
 /// Close the loop: the controller `ctl` (SIL or HIL) tracks the plan on the joint plant
 /// for the whole motion and `hold_s` after.
 pub fn track(
-    sys: &ArmSystem,
+    sys: &ArmScene,
     ctl: &mut dyn StepController<ArmController>,
     plan: &Plan,
 ) -> Result<(TrackedMotion, TrackingReport), ArmError> {
@@ -215,13 +215,14 @@ pub fn track(
     Ok((m, report))
 }
 
-/// [`track`] with the core linked in (SIL).
-pub fn track_sil(
-    sys: &ArmSystem,
-    plan: &Plan,
-) -> Result<(TrackedMotion, TrackingReport), ArmError> {
+/// The core's controller linked in (SIL), configured for `plan`.
+pub fn sil_controller(sys: &ArmScene, plan: &Plan) -> Result<Sil<ArmController>, ArmError> {
     let params = sys.controller_params(&plan.points_rad, plan.segment_s)?;
-    let mut sil = Sil::<ArmController>::new(params)
-        .map_err(|e| ArmError::NoPlan(format!("controller: {e}")))?;
+    Sil::<ArmController>::new(params).map_err(|e| ArmError::NoPlan(format!("controller: {e}")))
+}
+
+/// [`track`] with the core linked in (SIL).
+pub fn track_sil(sys: &ArmScene, plan: &Plan) -> Result<(TrackedMotion, TrackingReport), ArmError> {
+    let mut sil = sil_controller(sys, plan)?;
     track(sys, &mut sil, plan)
 }

@@ -155,6 +155,9 @@ pub struct PlannerSettings {
     pub normal_force_min_mps2: f64,
     /// Initial guesses tried.
     pub starts: usize,
+    /// Largest joint acceleration the plan may ask for, rad/s^2: the tracker's limit
+    /// `tracking.accel_max_radps2` less the `planner.accel_margin` left to its feedback.
+    pub accel_max_radps2: f64,
 }
 
 /// Validated closed-loop settings (see [`params::TrackingTable`]).
@@ -174,7 +177,7 @@ pub struct TrackingSettings {
 
 /// A validated arm scene: robot, object, task and settings.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ArmSystem {
+pub struct ArmScene {
     /// The object on its surface, and gravity.
     pub rig: Rig,
     /// The arm's own dynamics.
@@ -193,7 +196,7 @@ pub struct ArmSystem {
     pub tracking: TrackingSettings,
 }
 
-impl ArmSystem {
+impl ArmScene {
     /// Inertia (kg m^2) and gravity torque amplitude (N m) and phase (rad) of the arm with
     /// the object as a rigid payload at its starting place: what the controller's
     /// inverse dynamics assumes.

@@ -9,10 +9,24 @@
 use super::contact::{ArmInertia, Placement, Rig};
 use super::geometry::{Polygon, Surface, V2};
 use super::task::{Goal, Task, TaskKind};
-use super::{ArmError, ArmSystem, JointBounds, PlannerSettings, Solver, TrackingSettings};
+use super::{ArmError, ArmScene, JointBounds, PlannerSettings, Solver, TrackingSettings};
 use dexter_core::bspline::MAX_KNOTS;
-use dexter_core::params::{finite, non_negative, positive, ParamError};
+use dexter_core::params::{finite, non_negative, positive, within, ParamError};
+
+/// Longest phase a plan may have, s (`planner.phase_time_max_s`): with the hold and the
+/// brake it bounds a run's simulated time, hence its work and memory.
+pub const MAX_PHASE_TIME_S: f64 = 10.0;
+/// Longest hold after the motion, s (`task.hold_s`).
+pub const MAX_HOLD_S: f64 = 10.0;
+/// Gentlest release brake, rad/s^2 (`arm.brake_accel_radps2`): from the joint's speed
+/// limit it stops within `velocity_max / 1` s.
+pub const MIN_BRAKE_ACCEL_RADPS2: f64 = 1.0;
+/// Control period range, s (`tracking.dt_s`): at most 10^5 periods per 10 s of motion.
+pub const MIN_DT_S: f64 = 1e-4;
+/// See [`MIN_DT_S`].
+pub const MAX_DT_S: f64 = 0.1;
 use serde::{Deserialize, Serialize};
+use std::f64::consts::TAU;
 
 /// A whole arm scene.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
@@ -58,11 +72,11 @@ pub struct ArmTable {
     pub torque_rate_max_nmps: f64,
     /// `velocity_max_radps`: joint speed limit, rad/s (8).
     pub velocity_max_radps: f64,
-    /// `min_angle_rad`, `max_angle_rad`: joint limits, rad (-1.5, 1.5).
+    /// `min_angle_rad`, `max_angle_rad`: joint limits, rad, within +-2 pi (-1.5, 1.5).
     pub min_angle_rad: f64,
     /// See `min_angle_rad`.
     pub max_angle_rad: f64,
-    /// `brake_accel_radps2`: deceleration after a throw's release, rad/s^2 (30).
+    /// `brake_accel_radps2`: deceleration after a throw's release, rad/s^2, >= 1 (30).
     pub brake_accel_radps2: f64,
 }
 
@@ -177,7 +191,7 @@ pub struct TaskTable {
     /// objective mu + w v^2, (m/s)^-2 (0: minimize mu only).
     #[serde(default)]
     pub impact_weight_s2pm2: f64,
-    /// `hold_s`: time the verifier keeps the arm at rest after the motion, s (0.3).
+    /// `hold_s`: time the verifier keeps the arm at rest after the motion, s, 0 ..= 10 (0.3).
     #[serde(default = "default_hold")]
     pub hold_s: f64,
 }
@@ -206,7 +220,8 @@ pub struct PlannerTable {
     pub max_evaluations: usize,
     /// `solver`: `"slsqp"` or `"alm"` (augmented Lagrangian with PANOC).
     pub solver: Solver,
-    /// `phase_time_min_s`, `phase_time_max_s`: bounds on each phase's duration, s.
+    /// `phase_time_min_s`, `phase_time_max_s`: bounds on each phase's duration, s
+    /// (0.02, 1.5; the maximum at most 10).
     pub phase_time_min_s: f64,
     /// See `phase_time_min_s`.
     pub phase_time_max_s: f64,
@@ -219,6 +234,11 @@ pub struct PlannerTable {
     pub normal_force_min_mps2: f64,
     /// `starts`: initial guesses tried (1 ..= 8); the best feasible plan wins (3).
     pub starts: usize,
+    /// `accel_margin`: fraction of the tracker's acceleration limit
+    /// (`tracking.accel_max_radps2`) the plan leaves to the tracker's feedback: the
+    /// planned joint acceleration stays within `(1 - accel_margin) accel_max`, so the
+    /// controller can follow it without saturating (0.1; 0 ..= 0.9).
+    pub accel_margin: f64,
 }
 
 impl Default for PlannerTable {
@@ -235,6 +255,7 @@ impl Default for PlannerTable {
             friction_margin: 0.01,
             normal_force_min_mps2: 0.5,
             starts: 3,
+            accel_margin: 0.1,
         }
     }
 }
@@ -243,7 +264,7 @@ impl Default for PlannerTable {
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrackingTable {
-    /// `dt_s`: control period, s (0.001).
+    /// `dt_s`: control period, s, 1e-4 ..= 0.1 (0.001).
     pub dt_s: f64,
     /// `kp_per_s2`, `kd_per_s`: tracking gains (2500, 100).
     pub kp_per_s2: f64,
@@ -280,12 +301,14 @@ impl ArmConfig {
     }
 
     /// The validated system; errors name the key at fault.
-    pub fn validate(&self) -> Result<ArmSystem, ArmError> {
+    pub fn validate(&self) -> Result<ArmScene, ArmError> {
         let (arm, bounds, g) = self.arm.validate()?;
         let (rig, start) = self.object.validate(&self.arm, g)?;
         let task = self.task.validate(&bounds)?;
-        let planner = self.planner.validate(task.kind)?;
+        let mut planner = self.planner.validate(task.kind)?;
         let tracking = self.tracking.validate(&bounds)?;
+        let margin = within("planner.accel_margin", self.planner.accel_margin, 0.0, 0.9)?;
+        planner.accel_max_radps2 = (1.0 - margin) * tracking.accel_max_radps2;
         if start.sigma_m < 0.0
             || start.sigma_m + rig.body.edge_length_m(start.edge) > rig.surface.length_m
         {
@@ -294,7 +317,7 @@ impl ArmConfig {
                 "the contact edge lies on the surface",
             ));
         }
-        let system = ArmSystem {
+        let system = ArmScene {
             rig,
             arm,
             mass_kg: self.object.mass_kg,
@@ -323,12 +346,17 @@ impl ArmTable {
             gravity_phase_rad: 0.0,
         };
         let bounds = JointBounds {
-            min_angle_rad: finite("arm.min_angle_rad", self.min_angle_rad)?,
-            max_angle_rad: finite("arm.max_angle_rad", self.max_angle_rad)?,
+            min_angle_rad: within("arm.min_angle_rad", self.min_angle_rad, -TAU, TAU)?,
+            max_angle_rad: within("arm.max_angle_rad", self.max_angle_rad, -TAU, TAU)?,
             velocity_max_radps: positive("arm.velocity_max_radps", self.velocity_max_radps)?,
             torque_max_nm: positive("arm.torque_max_nm", self.torque_max_nm)?,
             torque_rate_max_nmps: positive("arm.torque_rate_max_nmps", self.torque_rate_max_nmps)?,
-            brake_accel_radps2: positive("arm.brake_accel_radps2", self.brake_accel_radps2)?,
+            brake_accel_radps2: within(
+                "arm.brake_accel_radps2",
+                self.brake_accel_radps2,
+                MIN_BRAKE_ACCEL_RADPS2,
+                f64::MAX,
+            )?,
         };
         if bounds.max_angle_rad <= bounds.min_angle_rad {
             return Err(relation(
@@ -450,7 +478,7 @@ impl TaskTable {
                 "task.impact_weight_s2pm2",
                 self.impact_weight_s2pm2,
             )?,
-            hold_s: non_negative("task.hold_s", self.hold_s)?,
+            hold_s: within("task.hold_s", self.hold_s, 0.0, MAX_HOLD_S)?,
         })
     }
 
@@ -489,7 +517,12 @@ impl PlannerTable {
             }
         };
         let t_min = positive("planner.phase_time_min_s", self.phase_time_min_s)?;
-        let t_max = positive("planner.phase_time_max_s", self.phase_time_max_s)?;
+        let t_max = within(
+            "planner.phase_time_max_s",
+            self.phase_time_max_s,
+            f64::MIN_POSITIVE,
+            MAX_PHASE_TIME_S,
+        )?;
         if t_max <= t_min {
             return Err(relation(
                 "planner.phase_time_max_s",
@@ -510,6 +543,8 @@ impl PlannerTable {
                 self.normal_force_min_mps2,
             )?,
             starts: count(self.starts, 1, 8, "planner.starts")?,
+            // set from the tracker's limit once that is validated
+            accel_max_radps2: f64::INFINITY,
         })
     }
 }
@@ -517,7 +552,7 @@ impl PlannerTable {
 impl TrackingTable {
     fn validate(&self, b: &JointBounds) -> Result<TrackingSettings, ArmError> {
         let t = TrackingSettings {
-            dt_s: positive("tracking.dt_s", self.dt_s)?,
+            dt_s: within("tracking.dt_s", self.dt_s, MIN_DT_S, MAX_DT_S)?,
             kp_per_s2: non_negative("tracking.kp_per_s2", self.kp_per_s2)?,
             kd_per_s: non_negative("tracking.kd_per_s", self.kd_per_s)?,
             accel_max_radps2: positive("tracking.accel_max_radps2", self.accel_max_radps2)?,

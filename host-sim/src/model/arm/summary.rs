@@ -4,17 +4,23 @@
 //! JSON keys (issue 15): `task`, `phases`, `mu_required`, `planner_iterations`,
 //! `planner_wall_time_s`, `goal_error`, `executed` (`"ok"`, `"slipped"`,
 //! `"lost_contact"`, `"missed"`), `mu_margin_check` (the run at 0.95 mu), plus
-//! `trajectory` (samples and knots), `friction` (executed and planned), `frames`
-//! (filmstrip), `arm_outline`, `events`, `tracked` (the closed loop on the core).
+//! `trajectory` (its knots), `events`, `tracked` (the closed loop on the core). What only
+//! the plots need (trajectory samples, friction over time, filmstrip frames, the arm's
+//! outline) is kept in the summary but left out of its JSON.
 
-use super::closed_loop::{track_sil, TrackingReport};
+use super::closed_loop::{sil_controller, track, TrackedMotion, TrackingReport};
 use super::contact::Joint;
 use super::geometry::V2;
 use super::motion::ArmMotion;
 use super::planner::evaluate::PlanSample;
 use super::planner::{plan, PhaseSpan, Plan};
-use super::simulate::{execute, Event, Executed, Execution, Frame, FrictionSample, GoalError};
-use super::{ArmError, ArmSystem, Solver};
+use super::simulate::{
+    execute_observed, execute_with, Event, Executed, Execution, Frame, FrictionSample, GoalError,
+    Sample, SimOptions,
+};
+use super::{ArmError, ArmScene, Solver};
+use crate::controller::StepController;
+use dexter_core::arm_control::ArmController;
 use serde::Serialize;
 
 /// Factor of the margin check (issue 15: "mu 5 % below the plan's value").
@@ -49,7 +55,9 @@ pub struct TrajectoryData {
     pub segment_s: f64,
     /// The control points on the time axis.
     pub knots: Vec<Knot>,
-    /// Samples every 5 ms through the spline and the release brake.
+    /// Samples every 5 ms through the spline and the release brake (plots; not in the
+    /// JSON: `--trace` has the motion).
+    #[serde(skip_serializing)]
     pub samples: Vec<(f64, Joint)>,
 }
 
@@ -91,13 +99,18 @@ pub struct ArmSummary {
     pub phase_times: Vec<PhaseSpan>,
     /// Joint trajectory with knots.
     pub trajectory: TrajectoryData,
-    /// Friction needed over time in the verified run.
+    /// Friction needed over time in the verified run (plots only).
+    #[serde(skip_serializing)]
     pub friction: Vec<FrictionSample>,
-    /// Friction needed at the plan's own samples.
+    /// Friction needed at the plan's own samples (plots only).
+    #[serde(skip_serializing)]
     pub friction_planned: Vec<PlanSample>,
-    /// Filmstrip frames of the verified run.
+    /// Filmstrip frames of the verified run (plots only).
+    #[serde(skip_serializing)]
     pub frames: Vec<Frame>,
-    /// The arm's outline in its own frame (link and palm), m: rotate by a frame's angle.
+    /// The arm's outline in its own frame (link and palm), m: rotate by a frame's angle
+    /// (plots only).
+    #[serde(skip_serializing)]
     pub arm_outline: Vec<V2>,
     /// Events of the verified run.
     pub events: Vec<Event>,
@@ -112,22 +125,49 @@ pub struct RunOptions {
     pub track: bool,
 }
 
-/// Plan, verify at mu and at 0.95 mu, optionally track; the summary.
-pub fn run(sys: &ArmSystem, opt: RunOptions) -> Result<ArmSummary, ArmError> {
+/// Plan, verify at mu and at 0.95 mu, optionally track (SIL); the summary.
+pub fn run(sys: &ArmScene, opt: RunOptions) -> Result<ArmSummary, ArmError> {
     let p = plan(sys)?;
-    let motion = p.motion(sys.bounds.brake_accel_radps2);
-    let ok = execute(sys, &motion, p.mu);
-    let low = execute(sys, &motion, MARGIN_FACTOR * p.mu);
-    let tracked = if opt.track {
-        Some(track_sil(sys, &p)?.1)
-    } else {
-        None
+    let mut sil = match opt.track {
+        true => Some(sil_controller(sys, &p)?),
+        false => None,
     };
-    Ok(summarize(sys, &p, &motion, ok, low, tracked))
+    let tracker = sil
+        .as_mut()
+        .map(|c| c as &mut dyn StepController<ArmController>);
+    Ok(run_with(sys, &p, tracker, &mut |_| {})?.0)
+}
+
+/// Verify `plan` at its mu (handing `observe` every [`Sample`] of that run) and at 0.95
+/// mu, and, with a `tracker` (the core linked in, or the firmware in QEMU), close the
+/// joint's loop through it and verify the tracked motion; the summary and the tracked
+/// motion.
+pub fn run_with(
+    sys: &ArmScene,
+    plan: &Plan,
+    tracker: Option<&mut dyn StepController<ArmController>>,
+    observe: &mut dyn FnMut(&Sample),
+) -> Result<(ArmSummary, Option<TrackedMotion>), ArmError> {
+    let motion = plan.motion(sys.bounds.brake_accel_radps2);
+    let ok = execute_observed(sys, &motion, plan.mu, SimOptions::default(), observe);
+    let quiet = SimOptions {
+        record: false,
+        ..SimOptions::default()
+    };
+    let low = execute_with(sys, &motion, MARGIN_FACTOR * plan.mu, quiet);
+    let (tracked_motion, tracked) = match tracker {
+        Some(c) => {
+            let (m, r) = track(sys, c, plan)?;
+            (Some(m), Some(r))
+        }
+        None => (None, None),
+    };
+    let summary = summarize(sys, plan, &motion, ok, low, tracked);
+    Ok((summary, tracked_motion))
 }
 
 fn summarize(
-    sys: &ArmSystem,
+    sys: &ArmScene,
     p: &Plan,
     motion: &dyn ArmMotion,
     ok: Execution,
@@ -184,7 +224,7 @@ fn summarize(
 
 /// The link as a rectangle from the joint axis to its tip (top surface at the given
 /// half thickness), and the palm as a segment from the tip, in the arm frame.
-fn arm_outline(sys: &ArmSystem) -> Vec<V2> {
+fn arm_outline(sys: &ArmScene) -> Vec<V2> {
     let s = &sys.rig.surface;
     let h = s.origin.y;
     let (l, palm) = if s.beta_rad == 0.0 {
@@ -199,39 +239,4 @@ fn arm_outline(sys: &ArmSystem) -> Vec<V2> {
     }
     v.push(V2::new(0.0, h));
     v
-}
-
-impl ArmSummary {
-    /// A few lines for a terminal.
-    pub fn text(&self) -> String {
-        let mut s = format!(
-            "task {} ({}): mu_required {:.4}, planner {:?} {} iterations {:.2} s ({})\n",
-            self.task,
-            self.phases,
-            self.mu_required,
-            self.planner_solver,
-            self.planner_iterations,
-            self.planner_wall_time_s,
-            self.planner_status
-        );
-        s += &format!("executed: {:?} ({})\n", self.executed, self.reason);
-        if let Some(e) = self.goal_error {
-            s += &format!(
-                "goal error: {:.4} m, {:.4} rad\n",
-                e.position_m, e.angle_rad
-            );
-        }
-        let m = &self.mu_margin_check;
-        s += &format!(
-            "at mu {:.4} (0.95x): {:?} ({})\n",
-            m.mu, m.executed, m.reason
-        );
-        if let Some(t) = &self.tracked {
-            s += &format!(
-                "tracked on the core: {:?}, max error {:.2e} rad, needs mu {:.4} ({:?} with it)\n",
-                t.executed, t.max_tracking_error_rad, t.mu_needed, t.executed_at_mu_needed
-            );
-        }
-        s
-    }
 }

@@ -1,7 +1,7 @@
 //! The stable push: when a part with edge `e` flush on the turning fence moves with it,
 //! and the minimum contact radius that makes that so (sec. 3.2 of the paper: "A stable
 //! push is possible for any stable edge, provided that the contact radius is higher than
-//! some minimum ... [depending] on the edge, on the object shape, the center of gravity,
+//! some minimum ... \[depending\] on the edge, on the object shape, the center of gravity,
 //! the angular rate of the fence relative to the conveyor speed, and the coefficient of
 //! friction").
 //!

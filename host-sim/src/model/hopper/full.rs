@@ -64,6 +64,10 @@ impl FullNonlinear {
     pub fn spring_eta1(&self) -> f64 {
         self.eta1
     }
+    /// gamma, 1/s.
+    pub fn friction_gamma_per_s(&self) -> f64 {
+        self.gamma
+    }
     /// mu'.
     pub fn leg_mass_ratio(&self) -> f64 {
         self.leg_mass_ratio

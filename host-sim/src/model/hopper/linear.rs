@@ -177,6 +177,19 @@ impl LinearSpring {
         t
     }
 
+    /// The free stance motion (valve closed) in closed form, for plants that step it in
+    /// pieces (the sampled plant, [`super::valve`]): (y, y') after `t_s` s from (y0, v0),
+    /// y = chi - chi_eq in m, y' in m/s (the module's damped-oscillator formula).
+    pub fn free_motion(&self, y0_m: f64, v0_mps: f64, t_s: f64) -> (f64, f64) {
+        self.free(y0_m, v0_mps, t_s)
+    }
+
+    /// The first time > 0 at which the free stance velocity from (y0, v0) vanishes, s
+    /// (0 at rest at chi_eq); later zeros follow every pi / omega.
+    pub fn first_velocity_zero_s(&self, y0_m: f64, v0_mps: f64) -> f64 {
+        self.first_velocity_zero(y0_m, v0_mps)
+    }
+
     pub(crate) fn stance(
         &self,
         entry: Entry,
@@ -282,6 +295,23 @@ pub(crate) fn bisect_rising(f: &impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -
         }
     }
     hi
+}
+
+/// The thrust motion in closed form (eq. 8 / 10 with the valve open): (chi, chi') after
+/// `t_s` s of chi'' = a - gamma chi' from (`x0_m`, `v0_mps`), with a = tau - g the net
+/// thrust (m/s^2) and gamma (1/s) the friction: chi = x0 + v0 phi1(t) + a (t - phi1(t))/gamma,
+/// chi' = v0 e^{-gamma t} + a phi1(t), phi1 = (1 - e^{-gamma t})/gamma.
+pub fn thrust_motion(
+    x0_m: f64,
+    v0_mps: f64,
+    net_accel_mps2: f64,
+    gamma_per_s: f64,
+    t_s: f64,
+) -> (f64, f64) {
+    (
+        x0_m + v0_mps * phi1(gamma_per_s, t_s) + net_accel_mps2 * psi2(gamma_per_s, t_s),
+        v0_mps * (-gamma_per_s * t_s).exp() + net_accel_mps2 * phi1(gamma_per_s, t_s),
+    )
 }
 
 /// (1 - e^{-gamma t}) / gamma, s (t for gamma = 0).

@@ -26,11 +26,14 @@
 //! period doubling. [`params::HopperParams`] is the scene's `[hopper]` table.
 
 pub mod analysis;
+pub mod eq17;
 pub mod full;
 pub mod integrate;
 pub mod linear;
 pub mod nonlinear;
 pub mod params;
+pub mod sampled;
+pub mod valve;
 
 pub use full::FullNonlinear;
 pub use integrate::Integrator;
@@ -44,6 +47,10 @@ use dexter_core::params::ParamError;
 /// Most dense samples one run keeps ([`RunOptions::samples_per_phase`] is per phase; the run
 /// stops sampling, not simulating, once this many are stored).
 pub const MAX_SAMPLES: usize = 200_000;
+
+/// Most samples per phase and hop (`hopper.samples_per_phase`): a run computes at most
+/// [`MAX_SAMPLES`] plus one phase's worth of them.
+pub const MAX_SAMPLES_PER_PHASE: usize = 10_000;
 
 /// Why a hopper could not be built or run. Parameter errors name the scene key.
 #[derive(Clone, Debug, PartialEq)]
@@ -183,8 +190,9 @@ impl Start {
 pub enum RunEnd {
     /// All requested cycles were simulated.
     Completed,
-    /// The body turned back down before the leg was extended: no liftoff (the hopper
-    /// stalls on the ground; the cycle is not recorded).
+    /// The body turned back down before the leg was extended, or nothing drives it out of
+    /// the bottom (eq. 9 with no thrust, tau = 0): no liftoff (the hopper stalls on the
+    /// ground; the cycle is not recorded).
     NoLiftoff,
     /// The energy servo asked for a thrust tau_n <= g in a model whose thrust phase has no
     /// spring support (linear with delta > 0, full): the body would sink during the thrust;
@@ -301,8 +309,10 @@ pub(crate) struct Sampler<'a> {
 }
 
 impl Sampler<'_> {
+    /// True while samples are wanted and room is left for them: a run stops computing
+    /// samples, not simulating, once [`MAX_SAMPLES`] are stored.
     pub fn on(&self) -> bool {
-        self.per_phase > 0 && self.out.is_some()
+        self.per_phase > 0 && self.out.as_ref().is_some_and(|v| v.len() < MAX_SAMPLES)
     }
     pub fn push(&mut self, phase: StancePhase, state: HopEvent) {
         if let Some(v) = self.out.as_deref_mut() {
@@ -477,9 +487,6 @@ impl Hopper {
         samples: Option<&mut Vec<Sample>>,
         on_cycle: &mut impl FnMut(&Cycle),
     ) -> Result<(RunEnd, u64), HopperError> {
-        let chi_l = self.model.liftoff_m();
-        let g = self.model.gravity_mps2();
-        let pickup = 1.0 / (1.0 + self.model.leg_mass_ratio());
         let mut sampler = Sampler {
             out: samples,
             per_phase: opts.samples_per_phase,
@@ -490,7 +497,32 @@ impl Hopper {
         } else {
             f64::NAN
         };
-        let mut entry = match start {
+        let mut entry = self.first_entry(start, t0, &mut sampler)?;
+        let mut steps = 0;
+        for n in 0..cycles {
+            sampler.cycle = n;
+            match self.cycle(n, entry, opts, &mut sampler, &mut steps) {
+                Ok(cycle) => {
+                    on_cycle(&cycle);
+                    entry = Entry::Touchdown(cycle.next_touchdown);
+                }
+                Err(end) => return Ok((end, steps)),
+            }
+        }
+        Ok((RunEnd::Completed, steps))
+    }
+
+    /// The first cycle's entry event: the touchdown a flight start falls to (closed form),
+    /// or the bottom a bottom start is.
+    fn first_entry(
+        &self,
+        start: Start,
+        t0: f64,
+        sampler: &mut Sampler<'_>,
+    ) -> Result<Entry, HopperError> {
+        let chi_l = self.model.liftoff_m();
+        let g = self.model.gravity_mps2();
+        match start {
             Start::Flight {
                 height_m,
                 velocity_mps,
@@ -507,13 +539,13 @@ impl Hopper {
                 let vtd = -(v * v + 2.0 * g * (h - chi_l)).sqrt();
                 let t = (v - vtd) / g;
                 if sampler.on() {
-                    flight_samples(&mut sampler, t0, h, v, t, g);
+                    flight_samples(sampler, t0, h, v, t, g);
                 }
-                Entry::Touchdown(HopEvent {
+                Ok(Entry::Touchdown(HopEvent {
                     time_s: t0 + t,
                     height_m: chi_l,
                     velocity_mps: vtd,
-                })
+                }))
             }
             Start::Bottom { height_m } => {
                 let x = params::check_finite("hopper.initial_heights_m", height_m)?;
@@ -523,79 +555,82 @@ impl Hopper {
                         requirement: "0 < x_0 < hopper.liftoff_height_m for a bottom start",
                     });
                 }
-                Entry::Bottom(HopEvent {
+                Ok(Entry::Bottom(HopEvent {
                     time_s: t0,
                     height_m: x,
                     velocity_mps: 0.0,
-                })
+                }))
             }
+        }
+    }
+
+    /// Cycle `n` from `entry`: the stance under this cycle's thrust, then the closed-form
+    /// flight to the next touchdown; `Err` is how the run ends instead. Adds the stance's
+    /// integration steps to `steps`.
+    fn cycle(
+        &self,
+        n: usize,
+        entry: Entry,
+        opts: &RunOptions,
+        sampler: &mut Sampler<'_>,
+        steps: &mut u64,
+    ) -> Result<Cycle, RunEnd> {
+        let chi_l = self.model.liftoff_m();
+        let g = self.model.gravity_mps2();
+        let (touchdown, e_td) = match entry {
+            Entry::Touchdown(td) => (Some(td), flight_energy_jpkg(0.0, td.velocity_mps, g)),
+            Entry::Bottom(_) => (None, f64::NAN),
         };
-        let mut steps = 0;
-        for n in 0..cycles {
-            sampler.cycle = n;
-            let (touchdown, e_td) = match entry {
-                Entry::Touchdown(td) => (Some(td), flight_energy_jpkg(0.0, td.velocity_mps, g)),
-                Entry::Bottom(_) => (None, f64::NAN),
-            };
-            let thrust = self.law.stance(e_td);
-            let unsupported = match self.model {
-                HopperModel::SimplifiedNonlinear(_) => false,
-                HopperModel::Linear(_) => thrust.duration_s() > 0.0,
-                HopperModel::Full(_) => true,
-            };
-            if unsupported && thrust.thrust_mps2() <= g {
-                return Ok((RunEnd::WeakThrust, steps));
-            }
-            let st = match self.model.stance(entry, thrust, opts, &mut sampler) {
-                Ok(st) => st,
-                Err(end) => return Ok((end, steps)),
-            };
-            steps += st.steps;
-            let v_before = st.liftoff.velocity_mps.max(0.0);
-            let v = v_before * pickup; // eq. 7
-            let liftoff = HopEvent {
-                velocity_mps: v,
-                ..st.liftoff
-            };
-            let apex = HopEvent {
+        let thrust = self.law.stance(e_td);
+        let unsupported = match self.model {
+            HopperModel::SimplifiedNonlinear(_) => false,
+            HopperModel::Linear(_) => thrust.duration_s() > 0.0,
+            HopperModel::Full(_) => true,
+        };
+        if unsupported && thrust.thrust_mps2() <= g {
+            return Err(RunEnd::WeakThrust);
+        }
+        let st = self.model.stance(entry, thrust, opts, sampler)?;
+        *steps += st.steps;
+        let v_before = st.liftoff.velocity_mps.max(0.0);
+        let v = v_before * (1.0 / (1.0 + self.model.leg_mass_ratio())); // eq. 7
+        let liftoff = HopEvent {
+            velocity_mps: v,
+            ..st.liftoff
+        };
+        let next = HopEvent {
+            time_s: liftoff.time_s + 2.0 * v / g,
+            height_m: chi_l,
+            velocity_mps: -v,
+        };
+        if sampler.on() {
+            flight_samples(sampler, liftoff.time_s, chi_l, v, 2.0 * v / g, g);
+        }
+        let x = st.bottom.height_m;
+        let times_ok = !opts.times || next.time_s.is_finite();
+        if !(x.is_finite() && v.is_finite() && st.energy.is_finite() && times_ok) {
+            return Err(RunEnd::NonFinite);
+        }
+        Ok(Cycle {
+            index: n,
+            touchdown,
+            bottom: st.bottom,
+            end_of_thrust: st.end_of_thrust,
+            liftoff,
+            liftoff_velocity_before_mps: v_before,
+            apex: HopEvent {
                 time_s: liftoff.time_s + v / g,
                 height_m: chi_l + v * v / (2.0 * g),
                 velocity_mps: 0.0,
-            };
-            let next = HopEvent {
-                time_s: liftoff.time_s + 2.0 * v / g,
-                height_m: chi_l,
-                velocity_mps: -v,
-            };
-            if sampler.on() {
-                flight_samples(&mut sampler, liftoff.time_s, chi_l, v, 2.0 * v / g, g);
-            }
-            let x = st.bottom.height_m;
-            let energy = st.energy;
-            let times_ok = !opts.times || next.time_s.is_finite();
-            if !(x.is_finite() && v.is_finite() && energy.is_finite() && times_ok) {
-                return Ok((RunEnd::NonFinite, steps));
-            }
-            let cycle = Cycle {
-                index: n,
-                touchdown,
-                bottom: st.bottom,
-                end_of_thrust: st.end_of_thrust,
-                liftoff,
-                liftoff_velocity_before_mps: v_before,
-                apex,
-                next_touchdown: next,
-                bottom_height_m: x,
-                energy,
-                touchdown_energy_jpkg: e_td,
-                thrust_mps2: thrust.thrust_mps2(),
-                early_liftoff: st.early_liftoff,
-                dissipating: self.model.dissipating(x, thrust.thrust_mps2()),
-            };
-            on_cycle(&cycle);
-            entry = Entry::Touchdown(next);
-        }
-        Ok((RunEnd::Completed, steps))
+            },
+            next_touchdown: next,
+            bottom_height_m: x,
+            energy: st.energy,
+            touchdown_energy_jpkg: e_td,
+            thrust_mps2: thrust.thrust_mps2(),
+            early_liftoff: st.early_liftoff,
+            dissipating: self.model.dissipating(x, thrust.thrust_mps2()),
+        })
     }
 }
 

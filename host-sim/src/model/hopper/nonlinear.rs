@@ -22,7 +22,7 @@
 //! decompression chi_l sqrt(2/eta2) D(sqrt(E_b)). D is evaluated by Gauss-Legendre quadrature
 //! of its smooth, bounded integrand ([`dawson`]), to ~1e-15 relative.
 
-use super::{Entry, HopEvent, HopperError, RunOptions, Sampler, Stance, StanceResult};
+use super::{Entry, HopEvent, HopperError, RunEnd, RunOptions, Sampler, Stance, StanceResult};
 use dexter_core::hop::{leg_mass_factor, RaibertThrust, StancePhase};
 use dexter_core::params::{non_negative, positive};
 
@@ -120,6 +120,11 @@ impl SimplifiedNonlinear {
         let eta2 = tau * x_b;
         // eq. 12 from the bottom: chi'_l-^2 = 2 eta2 ln(chi_l / x_b)
         let v_l = (2.0 * eta2 * e_b).sqrt();
+        if tau == 0.0 && e_b > 0.0 {
+            // no thrust: nothing drives the leg out of the bottom (eq. 9's spring is
+            // exhausted there), the body stays down
+            return Err(RunEnd::NoLiftoff);
+        }
         let t_dec = if eta2 > 0.0 {
             chi_l * (2.0 / eta2).sqrt() * d
         } else if e_b == 0.0 {

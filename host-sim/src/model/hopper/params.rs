@@ -119,7 +119,8 @@ pub struct HopperParams {
     /// `tolerance_m`: RK45 local error tolerance, m (> 0). Default 1e-10.
     #[serde(default = "default_tolerance")]
     pub tolerance_m: f64,
-    /// `samples_per_phase`: dense samples per phase and hop for phase portraits (0 = none).
+    /// `samples_per_phase`: dense samples per phase and hop for phase portraits (0 = none;
+    /// at most [`super::MAX_SAMPLES_PER_PHASE`]; a run keeps at most [`super::MAX_SAMPLES`]).
     /// Default 0.
     #[serde(default)]
     pub samples_per_phase: usize,
@@ -223,6 +224,13 @@ impl HopperParams {
         };
         if self.cycles == 0 {
             return Err(HopperError::Param(ParamError::NotPositive("hopper.cycles")));
+        }
+        if self.samples_per_phase > super::MAX_SAMPLES_PER_PHASE {
+            return Err(HopperError::Relation {
+                param: "hopper.samples_per_phase",
+                requirement:
+                    "<= 10000 (samples per phase and hop; a run keeps at most 200000 in all)",
+            });
         }
         Hopper::new(model, law)
     }

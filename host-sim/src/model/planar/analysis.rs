@@ -12,11 +12,23 @@
 //! # Finite differences with steps chosen for accuracy
 //!
 //! Column j of the Jacobian is the central difference `D(h) = (F(z + h e_j) - F(z - h e_j))/2h`
-//! (error `O(h^2)` from truncation, `O(eps/h)` from rounding), Richardson-extrapolated twice:
-//! `R(h) = (4 D(h/2) - D(h))/3` (error `O(h^4)`). With `h = STEP_REL * scale_j`, scale_j the
-//! coordinate's natural size (rho for rho theta, |y*| for the velocities), truncation and
-//! rounding are both near 1e-12; the reported error estimate is `max |R(h/2) - R(h)|` over
-//! the entries (an upper estimate of the coarser level's error).
+//! (error `O(h^2)` from truncation, `O(eps/h)` from rounding), Richardson-extrapolated:
+//! `R(h) = (4 D(h/2) - D(h))/3` (error `O(h^4)`). No one step suits every gain: at large
+//! kappa the map is so steep that `STEP_REL` of rho in rho theta tilts the table by
+//! radians. So each column tries `h = STEP_REL * scale_j / 2^i` for i up to
+//! [`STEP_HALVINGS`] (scale_j the coordinate's natural size: rho for rho theta, |y*| for the
+//! velocities) and keeps the step where neighbouring Richardson values `R(h)`, `R(h/2)`
+//! differ least: past it truncation, before it rounding, makes them differ more. That
+//! difference is the reported error estimate.
+//!
+//! # The verdict
+//!
+//! The eigenvalues of the Jacobian and of its twin at twice each column's step are matched
+//! one to one; their largest distance (with the square root of the Jacobian's error, by
+//! which a double eigenvalue can move, and [`VERDICT_FLOOR`]) is the uncertainty `tol` of
+//! every eigenvalue. Unstable if some |lambda| > 1 + tol, asymptotically stable if every
+//! |lambda| < 1 - tol, marginal if the largest is within tol of 1 and tol <=
+//! [`MARGINAL_MAX_TOL`], else "unreliable": the linearization cannot decide.
 //!
 //! # Closed forms for comparison
 //!
@@ -32,8 +44,21 @@ use dexter_core::tilt::{
 };
 use serde::Serialize;
 
-/// Relative finite-difference step (before the two halvings of Richardson extrapolation).
+/// Relative finite-difference step: the largest tried.
 pub const STEP_REL: f64 = 2e-3;
+/// Halvings of the step tried per column (down to `STEP_REL / 2^32`, 5e-13).
+pub const STEP_HALVINGS: usize = 32;
+/// Least uncertainty the verdict allows on |lambda| (rounding of a well-conditioned
+/// Jacobian).
+pub const VERDICT_FLOOR: f64 = 1e-9;
+/// Rounding of one map evaluation, in ulps of its largest value (the contact time is
+/// found to a few ulps; the state after it carries a few more).
+pub const ROUNDING_ULPS: f64 = 64.0;
+/// Trials of [`sensitivity`].
+pub const PERTURBATIONS: usize = 8;
+/// Largest uncertainty on |lambda| with which a modulus at 1 is still called marginal;
+/// above it the linearization cannot decide ([`Verdict::Unreliable`]).
+pub const MARGINAL_MAX_TOL: f64 = 1e-3;
 
 /// The parameters the analysis used.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -89,6 +114,24 @@ pub enum Verdict {
     Marginal,
     /// All |lambda| < 1.
     AsymptoticallyStable,
+    /// Some |lambda| is within the eigenvalues' uncertainty of 1 and that uncertainty
+    /// exceeds [`MARGINAL_MAX_TOL`]: the linearization cannot decide.
+    Unreliable,
+}
+
+impl Verdict {
+    /// The verdict for eigenvalues of largest modulus `max_mod`, each uncertain by `tol`.
+    pub fn of(max_mod: f64, tol: f64) -> Self {
+        if max_mod - tol > 1.0 {
+            Verdict::Unstable
+        } else if max_mod + tol < 1.0 {
+            Verdict::AsymptoticallyStable
+        } else if tol <= MARGINAL_MAX_TOL {
+            Verdict::Marginal
+        } else {
+            Verdict::Unreliable
+        }
+    }
 }
 
 /// The closed forms the numerical eigenvalues are compared with.
@@ -129,7 +172,10 @@ pub struct AnalysisReport {
     pub eigenvalues: Vec<Eigenvalue>,
     /// Verdict from the moduli.
     pub verdict: Verdict,
-    /// Tolerance on |lambda| = 1 used for the verdict.
+    /// The eigenvalues' uncertainty used for the verdict: the largest of the distance
+    /// between the eigenvalues of the Jacobian and of its coarser twin (matched one to one),
+    /// the square root of the Jacobian's error (a double eigenvalue moves by that much) and
+    /// [`VERDICT_FLOOR`].
     pub verdict_tolerance: f64,
     /// Closed forms.
     pub closed_form: ClosedForms,
@@ -193,56 +239,99 @@ pub fn impact_map(model: &PlanarModel, z: &[f64]) -> Result<Vec<f64>, RunEnd> {
     Ok(coords_of(model, &after.flown(t, model.gravity_mps2)))
 }
 
-fn central(model: &PlanarModel, z: &[f64], j: usize, h: f64) -> Result<Vec<f64>, PlanarError> {
+fn central(model: &PlanarModel, z: &[f64], j: usize, h: f64) -> Option<Vec<f64>> {
     let mut zp = z.to_vec();
     let mut zm = z.to_vec();
     zp[j] += h;
     zm[j] -= h;
-    let fail = |_| PlanarError::Analysis("impact map failed near the fixed point");
-    let fp = impact_map(model, &zp).map_err(fail)?;
-    let fm = impact_map(model, &zm).map_err(fail)?;
-    Ok(fp
+    let fp = impact_map(model, &zp).ok()?;
+    let fm = impact_map(model, &zm).ok()?;
+    let d: Vec<f64> = fp
         .iter()
         .zip(&fm)
         .map(|(a, b)| (a - b) / (2.0 * h))
-        .collect())
+        .collect();
+    d.iter().all(|x| x.is_finite()).then_some(d)
 }
 
-fn richardson(model: &PlanarModel, z: &[f64], j: usize, h: f64) -> Result<Vec<f64>, PlanarError> {
-    let d1 = central(model, z, j, h)?;
-    let d2 = central(model, z, j, 0.5 * h)?;
-    Ok(d1
-        .iter()
-        .zip(&d2)
-        .map(|(a, b)| (4.0 * b - a) / 3.0)
-        .collect())
+/// A column of the Jacobian at its best step: the Richardson value there, the one of the
+/// step twice as large, and their largest difference (the coarser value's error estimate).
+type Column = (Vec<f64>, Vec<f64>, f64);
+
+/// Column `j` of the Jacobian (module docs): central differences at `h0 / 2^i`,
+/// i = 0 ..= [`STEP_HALVINGS`], Richardson-extrapolated between neighbours; the pair of
+/// neighbouring Richardson values that differ least is kept. Steps at which the map fails
+/// (the body does not separate, no contact) are skipped.
+fn column(model: &PlanarModel, z: &[f64], j: usize, h0: f64, f_scale: f64) -> Option<Column> {
+    let mut h = h0;
+    let mut d_prev = central(model, z, j, h);
+    let mut r_prev: Option<Vec<f64>> = None;
+    let mut best: Option<Column> = None;
+    for _ in 0..STEP_HALVINGS {
+        h *= 0.5;
+        let d = central(model, z, j, h);
+        let r: Option<Vec<f64>> = match (&d_prev, &d) {
+            (Some(a), Some(b)) => Some(a.iter().zip(b).map(|(a, b)| (4.0 * b - a) / 3.0).collect()),
+            _ => None,
+        };
+        if let (Some(coarse), Some(fine)) = (&r_prev, &r) {
+            // the rounding of F over a step h bounds the error from below (two neighbours
+            // agreeing to the last bit at a step below the rounding are both wrong)
+            let rounding = ROUNDING_ULPS * f64::EPSILON * f_scale / h;
+            let err = coarse
+                .iter()
+                .zip(fine)
+                .fold(rounding, |m, (a, b): (&f64, &f64)| m.max((a - b).abs()));
+            if best.as_ref().is_none_or(|b| err < b.2) {
+                best = Some((fine.clone(), coarse.clone(), err));
+            }
+        }
+        (d_prev, r_prev) = (d, r);
+    }
+    best
 }
 
-/// The Jacobian of [`impact_map`] at `z` by twice-Richardson central differences with
-/// relative step `step_rel`, and its estimated max abs error.
-pub fn jacobian(
-    model: &PlanarModel,
-    z: &[f64],
-    step_rel: f64,
-) -> Result<(Vec<Vec<f64>>, f64), PlanarError> {
+/// The Jacobian of [`impact_map`] at `z` by central differences, Richardson-extrapolated,
+/// with each column's step chosen where neighbouring steps agree best (module docs); the
+/// step starts at `step_rel` times the coordinate's natural size.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Jacobian {
+    /// dF/dz, rows.
+    pub matrix: Vec<Vec<f64>>,
+    /// The same with every column at twice its step (to estimate the eigenvalues' error).
+    pub coarse: Vec<Vec<f64>>,
+    /// Estimated max abs error of the entries (of `coarse`; `matrix` is more accurate).
+    pub error: f64,
+}
+
+/// [`Jacobian`] of [`impact_map`] at `z`.
+pub fn jacobian(model: &PlanarModel, z: &[f64], step_rel: f64) -> Result<Jacobian, PlanarError> {
     let n = z.len();
     let v = z.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-3);
     let scales: Vec<f64> = match model.body {
         Body::PointMass => vec![v, v],
         Body::Rigid { rho_m, .. } => vec![rho_m, v, v, v],
     };
-    let mut jac = vec![vec![0.0; n]; n];
-    let mut err = 0.0f64;
-    for j in 0..n {
-        let h = step_rel * scales[j];
-        let coarse = richardson(model, z, j, h)?;
-        let fine = richardson(model, z, j, 0.5 * h)?;
+    let f_scale = impact_map(model, z)
+        .map_err(|_| PlanarError::Analysis("impact map failed at the fixed point"))?
+        .iter()
+        .fold(v, |m, x| m.max(x.abs()));
+    let mut out = Jacobian {
+        matrix: vec![vec![0.0; n]; n],
+        coarse: vec![vec![0.0; n]; n],
+        error: 0.0,
+    };
+    for (j, scale) in scales.iter().enumerate() {
+        let (fine, coarse, err) = column(model, z, j, step_rel * scale, f_scale).ok_or(
+            PlanarError::Analysis("impact map failed near the fixed point at every step"),
+        )?;
         for i in 0..n {
-            jac[i][j] = fine[i];
-            err = err.max((fine[i] - coarse[i]).abs());
+            out.matrix[i][j] = fine[i];
+            out.coarse[i][j] = coarse[i];
         }
+        out.error = out.error.max(err);
     }
-    Ok((jac, err))
+    Ok(out)
 }
 
 /// Match `predicted` one to one with `numeric` greedily by distance; the largest distance.
@@ -270,6 +359,54 @@ fn match_max_diff(predicted: &[(f64, f64)], numeric: &[Eigenvalue]) -> f64 {
     worst
 }
 
+/// How far the eigenvalues `eig` of `m` move when every entry of `m` moves by `delta`
+/// (the Jacobian's uncertainty), the largest over [`PERTURBATIONS`] sign patterns: an
+/// ill-conditioned eigenvalue (a small one beside a huge one at large kappa) moves far.
+pub fn sensitivity(m: &[Vec<f64>], eig: &[Eigenvalue], delta: f64) -> Result<f64, PlanarError> {
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut worst = 0.0f64;
+    for _ in 0..PERTURBATIONS {
+        let p: Vec<Vec<f64>> = m
+            .iter()
+            .map(|row| {
+                row.iter()
+                    .map(|x| {
+                        // xorshift: a fixed, reproducible sign pattern
+                        state ^= state << 13;
+                        state ^= state >> 7;
+                        state ^= state << 17;
+                        x + if state & 1 == 0 { delta } else { -delta }
+                    })
+                    .collect()
+            })
+            .collect();
+        let moved = eigenvalues_of(&p)?;
+        worst = worst.max(match_max_diff(&moved, eig));
+    }
+    Ok(worst)
+}
+
+fn eigenvalues_of(m: &[Vec<f64>]) -> Result<Vec<(f64, f64)>, PlanarError> {
+    super::eigen::eigenvalues(m).ok_or(PlanarError::Analysis(
+        "eigenvalue iteration did not converge",
+    ))
+}
+
+/// The uncertainty of the eigenvalues `eig` of `jac` (module docs, "The verdict").
+fn uncertainty(jac: &Jacobian, eig: &[Eigenvalue]) -> Result<f64, PlanarError> {
+    let coarse = eigenvalues_of(&jac.coarse)?;
+    let scale = jac
+        .matrix
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    let delta = jac.error.max(ROUNDING_ULPS * f64::EPSILON * scale);
+    Ok(match_max_diff(&coarse, eig)
+        .max(sensitivity(&jac.matrix, eig, delta)?)
+        .max(jac.error.sqrt())
+        .max(VERDICT_FLOOR))
+}
+
 /// Linearize the model's impact-to-impact map at its fixed point (module docs) and compare
 /// with the closed forms of eq. 11, 16, 26.
 pub fn analyze(model: &PlanarModel) -> Result<AnalysisReport, PlanarError> {
@@ -284,11 +421,12 @@ pub fn analyze(model: &PlanarModel) -> Result<AnalysisReport, PlanarError> {
         .iter()
         .zip(&z)
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-    let (jac, jac_err) = jacobian(model, &z, STEP_REL)?;
-    let eig = super::eigen::eigenvalues(&jac).ok_or(PlanarError::Analysis(
-        "eigenvalue iteration did not converge",
-    ))?;
-    let eigenvalues: Vec<Eigenvalue> = eig.into_iter().map(Eigenvalue::from_pair).collect();
+    let jac = jacobian(model, &z, STEP_REL)?;
+    let eigenvalues: Vec<Eigenvalue> = eigenvalues_of(&jac.matrix)?
+        .into_iter()
+        .map(Eigenvalue::from_pair)
+        .collect();
+    let tol = uncertainty(&jac, &eigenvalues)?;
     let g = model.gravity_mps2;
     let e = model.feedback.e();
     let ke = model.feedback.kappa_e_s2pm2();
@@ -318,15 +456,8 @@ pub fn analyze(model: &PlanarModel) -> Result<AnalysisReport, PlanarError> {
         }
     };
     let diff = match_max_diff(&predicted[..count], &eigenvalues);
-    let tol = 1e-6f64.max(100.0 * jac_err).max(jac_err.sqrt());
     let max_mod = eigenvalues.iter().fold(0.0f64, |m, x| m.max(x.modulus));
-    let verdict = if max_mod > 1.0 + tol {
-        Verdict::Unstable
-    } else if max_mod >= 1.0 - tol {
-        Verdict::Marginal
-    } else {
-        Verdict::AsymptoticallyStable
-    };
+    let verdict = Verdict::of(max_mod, tol);
     Ok(AnalysisReport {
         params: ResolvedParams {
             rho_m: rho,
@@ -340,8 +471,8 @@ pub fn analyze(model: &PlanarModel) -> Result<AnalysisReport, PlanarError> {
         },
         fixed_point: z,
         fixed_point_residual: residual,
-        jacobian: jac,
-        jacobian_error: jac_err,
+        jacobian: jac.matrix,
+        jacobian_error: jac.error,
         eigenvalues,
         verdict,
         verdict_tolerance: tol,
@@ -396,39 +527,14 @@ pub struct Cell {
     pub max_abs_theta_rad: f64,
 }
 
-/// Classify a run of `model` (see [`CellClass`]).
+/// Classify a run of `model` (see [`CellClass`]): [`super::stats::RunStats::class`] on
+/// every impact of the run.
 pub fn classify(model: &PlanarModel, run: &super::PlanarRun) -> CellClass {
-    let eta_star = model.feedback.target_energy_jpkg();
-    if run
-        .impacts
-        .iter()
-        .any(|r| r.energy_jpkg.is_nan() || r.energy_jpkg > 100.0 * eta_star)
-    {
-        return CellClass::Diverges;
+    let mut stats = super::stats::RunStats::new(model, run.impacts.len());
+    for r in &run.impacts {
+        stats.push(r);
     }
-    match run.end {
-        RunEnd::TippedOver => return CellClass::TipsOver,
-        RunEnd::Completed => {}
-        _ => return CellClass::Diverges,
-    }
-    let n = run.impacts.len();
-    if n < 4 {
-        return CellClass::Drifts;
-    }
-    let q = n / 4;
-    let late = &run.impacts[n - q..];
-    let early = &run.impacts[..q];
-    let mean = late.iter().map(|r| r.energy_jpkg).sum::<f64>() / late.len() as f64;
-    let settled = (mean - eta_star).abs() <= ENERGY_TOL * eta_star;
-    let amp = |rs: &[super::ImpactRecord]| {
-        rs.iter()
-            .fold(0.0f64, |m, r| m.max(r.before.theta_rad.abs()))
-    };
-    if settled && amp(late) <= GROWTH_TOL * amp(early) {
-        CellClass::Converges
-    } else {
-        CellClass::Drifts
-    }
+    stats.class(run.end)
 }
 
 /// A stability map over `thetas_rad` (rows) x `kappas` (columns): each cell is the scene
@@ -450,19 +556,53 @@ pub fn stability_map(
                 ..base.clone()
             };
             let model = p.build()?;
-            let run = model.run(p.start()?, impacts, p.seed);
+            let mut stats = super::stats::RunStats::new(&model, impacts);
+            let mut max_theta = 0.0f64;
+            let done = model.run_streaming(p.start()?, impacts, p.seed, &mut |r| {
+                stats.push(r);
+                max_theta = max_theta.max(r.before.theta_rad.abs());
+            });
             row.push(Cell {
                 theta0_rad: theta0,
                 kappa,
-                class: classify(&model, &run),
-                impacts: run.impacts.len(),
-                max_abs_theta_rad: run
-                    .impacts
-                    .iter()
-                    .fold(0.0f64, |m, r| m.max(r.before.theta_rad.abs())),
+                class: stats.class(done.end),
+                impacts: done.impacts,
+                max_abs_theta_rad: max_theta,
             });
         }
         rows.push(row);
     }
     Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An ill-conditioned Jacobian (a huge coupling beside a near-double eigenvalue) whose
+    /// coarse twin agrees with it: the uncertainty must still cover how far its eigenvalues
+    /// move under an entry error of the Jacobian's size (sqrt(1e-12 x 1e8) = 0.01 here).
+    #[test]
+    fn the_uncertainty_covers_ill_conditioned_eigenvalues() {
+        let m = vec![vec![1.0, 1e8], vec![0.0, 1.0 + 1e-9]];
+        let jac = Jacobian {
+            matrix: m.clone(),
+            coarse: m.clone(),
+            error: 1e-12,
+        };
+        let eig: Vec<Eigenvalue> = eigenvalues_of(&m)
+            .unwrap()
+            .into_iter()
+            .map(Eigenvalue::from_pair)
+            .collect();
+        let tol = uncertainty(&jac, &eig).unwrap();
+        // the lower-left entry at 1e-12: eigenvalues 1 +- sqrt(1e-12 x 1e8) = 1 +- 0.01
+        let mut moved = m.clone();
+        moved[1][0] = 1e-12;
+        let shifted = eigenvalues_of(&moved).unwrap();
+        let d = match_max_diff(&shifted, &eig);
+        assert!(d > 5e-3, "{d}");
+        assert!(tol >= d, "uncertainty {tol} < movement {d}");
+        assert!(Verdict::of(1.0, tol) == Verdict::Unreliable);
+    }
 }

@@ -12,6 +12,10 @@
 pub const MAX_N: usize = 6;
 /// Cap on Aberth iterations.
 pub const MAX_ITERATIONS: usize = 500;
+/// Largest distance (relative) between a complex root and the conjugate of its partner,
+/// and largest imaginary part of an unpaired root that is taken as rounding of a real one:
+/// well above the ~1e-8 to which a double root is resolved.
+pub const PAIR_TOL: f64 = 1e-6;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct C {
@@ -165,7 +169,19 @@ pub fn eigenvalues(a: &[Vec<f64>]) -> Option<Vec<(f64, f64)>> {
             }
         })
         .collect();
-    // pair complex roots with their conjugates
+    pair_conjugates(&mut out);
+    out.sort_by(|a, b| {
+        let (ma, mb) = (a.0.hypot(a.1), b.0.hypot(b.1));
+        mb.total_cmp(&ma).then(b.1.total_cmp(&a.1))
+    });
+    Some(out)
+}
+
+/// Make the complex roots exact conjugate pairs: each root is paired with the nearest root
+/// of opposite imaginary sign if that is its conjugate to within [`PAIR_TOL`]; an unpaired
+/// root with an imaginary part below that is taken as real.
+fn pair_conjugates(out: &mut [(f64, f64)]) {
+    let n = out.len();
     let mut paired = vec![false; n];
     for i in 0..n {
         if paired[i] || out[i].1 == 0.0 {
@@ -181,6 +197,14 @@ pub fn eigenvalues(a: &[Vec<f64>]) -> Option<Vec<(f64, f64)>> {
                 best = Some((j, d));
             }
         }
+        // a partner is a conjugate only if it is one to within the accuracy of a double
+        // root (two approximations of a near-double real root can both come out with
+        // imaginary parts of one sign: neither is then paired with a far root)
+        let scale = out[i].0.hypot(out[i].1).max(1.0);
+        let best = best.filter(|&(_, d)| d <= PAIR_TOL * scale);
+        if best.is_none() && out[i].1.abs() <= PAIR_TOL * scale {
+            out[i].1 = 0.0;
+        }
         if let Some((j, _)) = best {
             let re = 0.5 * (out[i].0 + out[j].0);
             let im = 0.5 * (out[i].1.abs() + out[j].1.abs());
@@ -190,9 +214,46 @@ pub fn eigenvalues(a: &[Vec<f64>]) -> Option<Vec<(f64, f64)>> {
             paired[j] = true;
         }
     }
-    out.sort_by(|a, b| {
-        let (ma, mb) = (a.0.hypot(a.1), b.0.hypot(b.1));
-        mb.total_cmp(&ma).then(b.1.total_cmp(&a.1))
-    });
-    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A near-double real root beside a complex pair (the lossless map's 1, 1 and eq. 11's
+    /// pair at 1 < kappa < kappa_crit), perturbed in every entry: the roots near 1 can come
+    /// out with imaginary parts of one sign; they must never be paired with the far pair.
+    #[test]
+    fn a_near_double_root_is_not_paired_with_a_far_root() {
+        let (c, s) = (0.65f64, (1.0f64 - 0.65 * 0.65).sqrt());
+        let base = [
+            [c, 0.0, 0.0, s],
+            [-33.7, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [-s, 0.0, 0.0, c],
+        ];
+        let mut state = 12345u64;
+        for trial in 0..200 {
+            let m: Vec<Vec<f64>> = base
+                .iter()
+                .map(|r| {
+                    r.iter()
+                        .map(|x| {
+                            state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+                            x + 5e-10 * ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5)
+                        })
+                        .collect()
+                })
+                .collect();
+            let ev = eigenvalues(&m).unwrap();
+            let want = [(1.0, 0.0), (1.0, 0.0), (c, s), (c, -s)];
+            for (re, im) in &ev {
+                let d = want
+                    .iter()
+                    .map(|w| (re - w.0).hypot(im - w.1))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(d < 1e-4, "trial {trial}: {ev:?}");
+            }
+        }
+    }
 }

@@ -131,101 +131,23 @@ pub fn coulomb(
         velocity[0] + geo.l_m * w * ct - table_velocity_mps[0],
         velocity[1] + geo.l_m * w * st - table_velocity_mps[1],
     ];
-    let mut un = nt[0] * uc[0] + nt[1] * uc[1];
-    let mut ut = tt[0] * uc[0] + tt[1] * uc[1];
+    let un = nt[0] * uc[0] + nt[1] * uc[1];
+    let ut = tt[0] * uc[0] + tt[1] * uc[1];
     let beta = theta_rad - alpha_rad;
     let (a, b) = (geo.l_m * beta.sin(), geo.l_m * beta.cos());
-    let (knn, knt, ktt) = if geo.rho_m > 0.0 {
+    let k = if geo.rho_m > 0.0 {
         let r2 = geo.rho_m * geo.rho_m;
-        (1.0 + a * a / r2, a * b / r2, 1.0 + b * b / r2)
+        [1.0 + a * a / r2, a * b / r2, 1.0 + b * b / r2]
     } else {
-        (1.0, 0.0, 1.0)
+        [1.0, 0.0, 1.0]
     };
-    let mut pn = 0.0f64;
-    let mut pt = 0.0f64;
-    let mut mode = FrictionMode::Frictionless;
-    if un < 0.0 {
-        // current tangential regime: Some(s) sliding with sign s, None sticking
-        let stick_ok = mu * ktt >= knt.abs();
-        let mut slide: Option<f64> = if ut != 0.0 {
-            Some(ut.signum())
-        } else if stick_ok {
-            None
-        } else {
-            Some(knt.signum())
-        };
-        let mut reversed = false;
-        let mut stuck = slide.is_none() && mu > 0.0;
-        let mut compression = true;
-        let mut pn_end = f64::INFINITY;
-        let mut done = false;
-        for _ in 0..MAX_SEGMENTS {
-            let q = match slide {
-                Some(s) => -mu * s,
-                None => -knt / ktt,
-            };
-            let dun = knn + knt * q;
-            let dut = knt + ktt * q;
-            if compression && dun <= 0.0 {
-                return Err(ImpactError::Jam);
-            }
-            // candidate step lengths in P_n
-            let to_c = if compression {
-                -un / dun
-            } else {
-                f64::INFINITY
-            };
-            let to_end = if compression {
-                f64::INFINITY
-            } else {
-                pn_end - pn
-            };
-            let to_stick = match slide {
-                Some(s) if mu > 0.0 && dut * s < 0.0 => -ut / dut,
-                _ => f64::INFINITY,
-            };
-            let step = to_c.min(to_end).min(to_stick).max(0.0);
-            pn += step;
-            pt += q * step;
-            un += dun * step;
-            ut += dut * step;
-            if step == to_stick && to_stick <= to_c.min(to_end) {
-                ut = 0.0;
-                if stick_ok {
-                    slide = None;
-                    stuck = true;
-                } else {
-                    slide = Some(knt.signum());
-                    reversed = true;
-                }
-                continue;
-            }
-            if compression {
-                un = 0.0;
-                compression = false;
-                pn_end = (1.0 + e) * pn;
-                if e == 0.0 {
-                    done = true;
-                    break;
-                }
-                continue;
-            }
-            done = true;
-            break;
-        }
-        if !done {
-            return Err(ImpactError::Cap);
-        }
-        mode = if mu == 0.0 || (pt == 0.0 && !stuck) {
-            FrictionMode::Frictionless
-        } else if reversed {
-            FrictionMode::Reversed
-        } else if stuck {
-            FrictionMode::Sticking
-        } else {
-            FrictionMode::Sliding
-        };
-    }
+    let (pn, pt, mode) = if un < 0.0 {
+        let mut sweep = Routh::start(k, mu, un, ut);
+        sweep.run(e)?;
+        (sweep.pn, sweep.pt, sweep.mode())
+    } else {
+        (0.0, 0.0, FrictionMode::Frictionless)
+    };
     let p = [pn * nt[0] + pt * tt[0], pn * nt[1] + pt * tt[1]];
     let dw = if geo.rho_m > 0.0 {
         (pn * a + pt * b) / (geo.rho_m * geo.rho_m)
@@ -238,4 +160,127 @@ pub fn coulomb(
         tangential_impulse_mps: pt,
         mode,
     })
+}
+
+/// Routh's sweep along the normal impulse P_n (module docs): the contact-point velocity
+/// (u_n, u_t) moves linearly in P_n within a segment of one tangential regime, with the
+/// inverse-mass entries `k = [k_nn, k_nt, k_tt]`.
+struct Routh {
+    knn: f64,
+    knt: f64,
+    ktt: f64,
+    mu: f64,
+    /// Sticking can hold: mu k_tt >= |k_nt|.
+    stick_ok: bool,
+    /// The tangential regime: `Some(s)` sliding with sign s, `None` sticking.
+    slide: Option<f64>,
+    reversed: bool,
+    stuck: bool,
+    compression: bool,
+    /// P_n at the end of restitution (Poisson), once compression has ended.
+    pn_end: f64,
+    pn: f64,
+    pt: f64,
+    un: f64,
+    ut: f64,
+}
+
+impl Routh {
+    fn start(k: [f64; 3], mu: f64, un: f64, ut: f64) -> Self {
+        let [knn, knt, ktt] = k;
+        let stick_ok = mu * ktt >= knt.abs();
+        let slide = if ut != 0.0 {
+            Some(ut.signum())
+        } else if stick_ok {
+            None
+        } else {
+            Some(knt.signum())
+        };
+        Routh {
+            knn,
+            knt,
+            ktt,
+            mu,
+            stick_ok,
+            slide,
+            reversed: false,
+            stuck: slide.is_none() && mu > 0.0,
+            compression: true,
+            pn_end: f64::INFINITY,
+            pn: 0.0,
+            pt: 0.0,
+            un,
+            ut,
+        }
+    }
+
+    /// Segments until restitution ends, at most `MAX_SEGMENTS`.
+    fn run(&mut self, e: f64) -> Result<(), ImpactError> {
+        for _ in 0..MAX_SEGMENTS {
+            if self.segment(e)? {
+                return Ok(());
+            }
+        }
+        Err(ImpactError::Cap)
+    }
+
+    /// One segment: to the first of the end of compression, the end of restitution, or the
+    /// tangential velocity reaching zero. True when the impact is over.
+    fn segment(&mut self, e: f64) -> Result<bool, ImpactError> {
+        let q = match self.slide {
+            Some(s) => -self.mu * s,
+            None => -self.knt / self.ktt,
+        };
+        let dun = self.knn + self.knt * q;
+        let dut = self.knt + self.ktt * q;
+        if self.compression && dun <= 0.0 {
+            return Err(ImpactError::Jam);
+        }
+        // candidate step lengths in P_n
+        let (to_c, to_end) = if self.compression {
+            (-self.un / dun, f64::INFINITY)
+        } else {
+            (f64::INFINITY, self.pn_end - self.pn)
+        };
+        let to_stick = match self.slide {
+            Some(s) if self.mu > 0.0 && dut * s < 0.0 => -self.ut / dut,
+            _ => f64::INFINITY,
+        };
+        let step = to_c.min(to_end).min(to_stick).max(0.0);
+        self.pn += step;
+        self.pt += q * step;
+        self.un += dun * step;
+        self.ut += dut * step;
+        if step == to_stick && to_stick <= to_c.min(to_end) {
+            self.ut = 0.0;
+            if self.stick_ok {
+                self.slide = None;
+                self.stuck = true;
+            } else {
+                self.slide = Some(self.knt.signum());
+                self.reversed = true;
+            }
+            return Ok(false);
+        }
+        if self.compression {
+            self.un = 0.0;
+            self.compression = false;
+            self.pn_end = (1.0 + e) * self.pn;
+            return Ok(e == 0.0);
+        }
+        Ok(true)
+    }
+
+    /// The regime the impact ended in.
+    fn mode(&self) -> FrictionMode {
+        if self.mu == 0.0 || (self.pt == 0.0 && !self.stuck) {
+            FrictionMode::Frictionless
+        } else if self.reversed {
+            FrictionMode::Reversed
+        } else if self.stuck {
+            FrictionMode::Sticking
+        } else {
+            FrictionMode::Sliding
+        }
+    }
 }

@@ -161,8 +161,11 @@ pub struct Bat {
 pub enum JuggleEnd {
     /// All impacts done.
     Completed,
-    /// No contact within the search window (ball missed the bar), or a cap was hit.
+    /// No contact within the search window (ball missed the bar).
     NoContact,
+    /// The contact search hit one of its iteration caps (an internal limit, not the
+    /// physics: the run is reported as cut short).
+    SearchCap,
     /// The ball was not approaching the bar at the contact, or 1 + k <= 0.
     BadContact,
     /// The ball left the right half plane b_x > 0 the laws assume.
@@ -237,7 +240,8 @@ impl PlanarJuggler {
                 let tol = 64.0 * f64::EPSILON * r_end;
                 match first_root(gap, a, 0.0, window, tol) {
                     Ok(Some(c)) => Ok(t_a + c.time_s),
-                    Ok(None) | Err(ContactError::Cap(_)) => Err(JuggleEnd::NoContact),
+                    Ok(None) => Err(JuggleEnd::NoContact),
+                    Err(ContactError::Cap(_)) => Err(JuggleEnd::SearchCap),
                     Err(ContactError::NonFinite) => Err(JuggleEnd::NonFinite),
                 }
             }

@@ -57,11 +57,15 @@
 //! eigenvalue solver), [`juggler`] (the planar juggler).
 
 pub mod analysis;
+pub mod camera;
 pub mod contact;
 pub mod eigen;
 pub mod impact;
 pub mod juggler;
 pub mod params;
+pub mod real_table;
+pub mod stats;
+pub mod table_run;
 
 pub use params::PlanarParams;
 
@@ -72,8 +76,9 @@ use impact::{FrictionMode, ImpactError, ImpactGeometry};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 
-/// Most impacts one run simulates.
-pub const MAX_IMPACTS: usize = 1_000_000;
+/// Most impacts one run simulates (`planar.impacts`): a bound on its time (about a
+/// microsecond per impact); its memory does not grow with the impacts.
+pub const MAX_IMPACTS: usize = 1_000_000_000;
 
 /// Why a planar model could not be built. Parameter errors name the scene key.
 #[derive(Clone, Debug, PartialEq)]
@@ -284,12 +289,29 @@ pub enum RunEnd {
     TippedOver,
     /// After an impact the contact point does not move away from the table (no flight).
     NoSeparation,
-    /// The contact search failed (cap hit, or no contact before the horizon).
+    /// No contact before the gap's horizon (the body never comes back to the table).
     NoContact,
+    /// The contact search hit one of its iteration caps (an internal limit, not the
+    /// physics: the run is reported as cut short).
+    SearchCap,
     /// Painlevé jam in a frictional impact.
     Jam,
     /// A state became non-finite.
     NonFinite,
+    /// The run's time limit passed before the requested impacts (only the real table has
+    /// one: `real_table.max_duration_s`).
+    TimeLimit,
+}
+
+/// How a streamed run ([`PlanarModel::run_streaming`]) ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Streamed {
+    /// Why the run ended.
+    pub end: RunEnd,
+    /// Impacts simulated (each passed on).
+    pub impacts: usize,
+    /// Gap evaluations of all contact searches.
+    pub gap_evaluations: usize,
 }
 
 /// A finished run.
@@ -419,106 +441,149 @@ impl PlanarModel {
             Ok(Some(c)) => Ok((c.time_s, c.grazing, c.evaluations)),
             Ok(None) => Err(RunEnd::NoContact),
             Err(ContactError::NonFinite) => Err(RunEnd::NonFinite),
-            Err(ContactError::Cap(_)) => Err(RunEnd::NoContact),
+            Err(ContactError::Cap(_)) => Err(RunEnd::SearchCap),
         }
     }
 
     /// Simulate `impacts` impacts from `start` (in flight, contact point above y = 0),
-    /// with timing noise drawn from `seed` when `timing_noise_s > 0`.
+    /// with timing noise drawn from `seed` when `timing_noise_s > 0`, keeping every impact
+    /// (memory grows with the run: the CLI streams with [`PlanarModel::run_streaming`]).
     pub fn run(&self, start: PlanarState, impacts: usize, seed: u64) -> PlanarRun {
+        let mut records = Vec::with_capacity(impacts.min(1 << 16));
+        let done = self.run_streaming(start, impacts, seed, &mut |r| records.push(*r));
+        PlanarRun {
+            impacts: records,
+            end: done.end,
+            gap_evaluations: done.gap_evaluations,
+        }
+    }
+
+    /// [`PlanarModel::run`], passing each impact to `on_impact` as it happens and keeping
+    /// none (constant memory however long the run).
+    pub fn run_streaming(
+        &self,
+        start: PlanarState,
+        impacts: usize,
+        seed: u64,
+        on_impact: &mut dyn FnMut(&ImpactRecord),
+    ) -> Streamed {
         let mut noise = (self.timing_noise_s > 0.0).then(|| {
             (
                 Normal::new(0.0, self.timing_noise_s).expect("sigma validated > 0"),
                 rand::rngs::StdRng::seed_from_u64(seed),
             )
         });
-        let impacts = impacts.min(MAX_IMPACTS);
-        let mut records = Vec::with_capacity(impacts);
-        let mut evals = 0usize;
+        let mut done = Streamed {
+            end: RunEnd::Completed,
+            impacts: 0,
+            gap_evaluations: 0,
+        };
         let mut s = start;
         let mut time = 0.0;
-        let l = self.l_m();
-        let end = 'run: {
-            for index in 0..impacts {
-                // predicted (ideal) impact
-                let (tau, grazing0, n0) = match self.ideal_contact_time_s(&s) {
-                    Ok(v) => v,
-                    Err(e) => break 'run e,
-                };
-                evals += n0;
-                let (dt, grazing, cmd) = match noise.as_mut() {
-                    None => {
-                        let before = s.flown(tau, self.gravity_mps2);
-                        (tau, grazing0, self.command(&before))
-                    }
-                    Some((normal, rng)) => {
-                        let sigma = self.timing_noise_s;
-                        let delta = normal.sample(rng).clamp(-4.0 * sigma, 4.0 * sigma);
-                        let t_est = (tau + delta).max(0.5 * tau);
-                        let predicted = s.flown(t_est, self.gravity_mps2);
-                        let cmd = self.command(&predicted);
-                        let point = predicted.contact_point(l);
-                        let gap = self.gap(&s, Some((&cmd, point, t_est)));
-                        match self.solve(&gap) {
-                            Ok((t, gz, n)) => {
-                                evals += n;
-                                (t, gz, cmd)
-                            }
-                            // the body starts below the table's (extrapolated) approach
-                            // line and never provably clears it: contact where the table
-                            // planned it, at t_est (the gap is zero there by construction)
-                            Err(RunEnd::NoContact) if gap.rate(t_est) < 0.0 => (t_est, false, cmd),
-                            Err(e) => break 'run e,
-                        }
-                    }
-                };
-                if dt.is_nan() || dt <= 0.0 {
-                    // contact again at once: the impact did not launch the body (no flight)
-                    break 'run RunEnd::NoSeparation;
+        for index in 0..impacts {
+            let record = match self.impact(&s, index, time, &mut noise, &mut done.gap_evaluations) {
+                Ok(r) => r,
+                Err(end) => {
+                    done.end = end;
+                    break;
                 }
-                let before = s.flown(dt, self.gravity_mps2);
-                time += dt;
-                if !(before.y_dot_mps.is_finite() && before.theta_rad.is_finite()) {
-                    break 'run RunEnd::NonFinite;
-                }
-                if matches!(self.body, Body::Rigid { .. })
-                    && before.theta_rad.abs() >= self.tip_angle_rad
-                {
-                    break 'run RunEnd::TippedOver;
-                }
-                let (after, mode) = match self.collide(&before, &cmd) {
-                    Ok(v) => v,
-                    Err(ImpactError::Jam) => break 'run RunEnd::Jam,
-                    Err(ImpactError::Cap) => break 'run RunEnd::NonFinite,
-                };
-                records.push(ImpactRecord {
-                    index,
-                    time_s: time,
-                    before,
-                    after,
-                    table: cmd,
-                    energy_jpkg: self.feedback.energy_jpkg(&before.body_state()),
-                    grazing,
-                    mode,
-                });
-                // the contact point must leave the table (relative normal velocity > 0)
-                let vc = after.body_state().contact_velocity(l);
-                let (sa, ca) = cmd.alpha_rad.sin_cos();
-                let rel = -sa * (vc[0] - cmd.velocity_mps[0]) + ca * (vc[1] - cmd.velocity_mps[1]);
-                if rel.is_nan() || rel <= 0.0 {
-                    break 'run RunEnd::NoSeparation;
-                }
-                s = after;
-                // the next search starts on the impact line: re-reference y so that the
-                // contact point's height is measured from y = 0 (the table plans the next
-                // impact at y = 0 again)
+            };
+            on_impact(&record);
+            done.impacts += 1;
+            time = record.time_s;
+            // the contact point must leave the table (relative normal velocity > 0)
+            if let Err(end) = self.separates(&record) {
+                done.end = end;
+                break;
             }
-            RunEnd::Completed
-        };
-        PlanarRun {
-            impacts: records,
-            end,
-            gap_evaluations: evals,
+            // the next search starts on the impact line: the table plans the next impact
+            // at y = 0 again
+            s = record.after;
         }
+        done
+    }
+
+    /// The table's command and the time to the contact (s) from `s` in flight, with the
+    /// timing noise if any (module docs).
+    fn contact(
+        &self,
+        s: &PlanarState,
+        noise: &mut Option<(Normal<f64>, rand::rngs::StdRng)>,
+        evals: &mut usize,
+    ) -> Result<(f64, bool, TableCommand), RunEnd> {
+        // predicted (ideal) impact
+        let (tau, grazing0, n0) = self.ideal_contact_time_s(s)?;
+        *evals += n0;
+        let Some((normal, rng)) = noise.as_mut() else {
+            let before = s.flown(tau, self.gravity_mps2);
+            return Ok((tau, grazing0, self.command(&before)));
+        };
+        let sigma = self.timing_noise_s;
+        let delta = normal.sample(rng).clamp(-4.0 * sigma, 4.0 * sigma);
+        let t_est = (tau + delta).max(0.5 * tau);
+        let predicted = s.flown(t_est, self.gravity_mps2);
+        let cmd = self.command(&predicted);
+        let point = predicted.contact_point(self.l_m());
+        let gap = self.gap(s, Some((&cmd, point, t_est)));
+        match self.solve(&gap) {
+            Ok((t, gz, n)) => {
+                *evals += n;
+                Ok((t, gz, cmd))
+            }
+            // the body starts below the table's (extrapolated) approach line and never
+            // provably clears it: contact where the table planned it, at t_est (the gap is
+            // zero there by construction)
+            Err(RunEnd::NoContact) if gap.rate(t_est) < 0.0 => Ok((t_est, false, cmd)),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Impact number `index` of a body in flight in state `s` at time `time_s`.
+    fn impact(
+        &self,
+        s: &PlanarState,
+        index: usize,
+        time_s: f64,
+        noise: &mut Option<(Normal<f64>, rand::rngs::StdRng)>,
+        evals: &mut usize,
+    ) -> Result<ImpactRecord, RunEnd> {
+        let (dt, grazing, cmd) = self.contact(s, noise, evals)?;
+        if dt.is_nan() || dt <= 0.0 {
+            // contact again at once: the impact did not launch the body (no flight)
+            return Err(RunEnd::NoSeparation);
+        }
+        let before = s.flown(dt, self.gravity_mps2);
+        if !(before.y_dot_mps.is_finite() && before.theta_rad.is_finite()) {
+            return Err(RunEnd::NonFinite);
+        }
+        if matches!(self.body, Body::Rigid { .. }) && before.theta_rad.abs() >= self.tip_angle_rad {
+            return Err(RunEnd::TippedOver);
+        }
+        let (after, mode) = self.collide(&before, &cmd).map_err(|e| match e {
+            ImpactError::Jam => RunEnd::Jam,
+            ImpactError::Cap => RunEnd::NonFinite,
+        })?;
+        Ok(ImpactRecord {
+            index,
+            time_s: time_s + dt,
+            before,
+            after,
+            table: cmd,
+            energy_jpkg: self.feedback.energy_jpkg(&before.body_state()),
+            grazing,
+            mode,
+        })
+    }
+
+    /// `Err(NoSeparation)` unless the contact point leaves the table after `r`.
+    fn separates(&self, r: &ImpactRecord) -> Result<(), RunEnd> {
+        let vc = r.after.body_state().contact_velocity(self.l_m());
+        let (sa, ca) = r.table.alpha_rad.sin_cos();
+        let v = r.table.velocity_mps;
+        let rel = -sa * (vc[0] - v[0]) + ca * (vc[1] - v[1]);
+        if rel.is_nan() || rel <= 0.0 {
+            return Err(RunEnd::NoSeparation);
+        }
+        Ok(())
     }
 }

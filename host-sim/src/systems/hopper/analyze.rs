@@ -323,7 +323,7 @@ impl Analysis<'_> {
             "  the scene's own run ({} cycles): late period {}\n",
             self.cycles,
             self.late_period
-                .map_or("none detected".into(), |p| p.to_string())
+                .map_or("not settled".into(), |p| p.to_string())
         );
         s
     }

@@ -8,10 +8,15 @@
 //!   eq. 9 it also locates the first period doubling (alpha = e^2).
 //! - `analyze` ([`analyze`]): the fixed point of the simulated cycle map and its slope by
 //!   finite differences, beside the closed forms (eq. 15/19, eq. 17).
+//!
+//! A `[hopper]` scene with a `[hopper.control]` table is the sampled hopper instead
+//! ([`sampled`]): the thrust valve switched by the core's fixed-rate controller, in SIL or
+//! on the MCU (`--hil`).
 
 pub mod analyze;
 pub mod closed;
 pub mod plots;
+pub mod sampled;
 pub mod summary;
 pub mod sweep;
 pub mod trace;
@@ -22,6 +27,7 @@ use super::{NoController, System};
 use crate::controller::StepController;
 use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Hopper, HopperParams, RunEnd, Start, MAX_SAMPLES};
+use crate::progress::Progress;
 use crate::scene::{deserialize, SceneError, SceneFile};
 use crate::verbs::{AnalyzeRequest, Failure, Setup, SweepRequest};
 use serde::Deserialize;
@@ -149,6 +155,14 @@ impl System for HopperSystem {
         HopperConfig::from_table(&file.stem, table)
     }
 
+    /// The exact hopper has no controller: `--hil` names the table that would add one.
+    fn controller_params(_: &HopperConfig) -> Result<Option<()>, SceneError> {
+        Err(SceneError::new(
+            "hopper.control",
+            "is absent: the exact hopper times its thrust exactly and has no controller to put on the target (--hil needs a [hopper.control] table: the sampled hopper, docs/hopper.md)",
+        ))
+    }
+
     fn run(
         cfg: &HopperConfig,
         _: Option<&mut dyn StepController<NoController>>,
@@ -167,9 +181,12 @@ impl System for HopperSystem {
         }
         let wall = Instant::now();
         let mut trajectories = Vec::with_capacity(cfg.starts.len());
+        let total = (cfg.params.cycles * cfg.starts.len()) as f64;
+        let mut bar = Progress::new([(total, "cycles")], setup.progress);
         for (i, &start) in cfg.starts.iter().enumerate() {
             let mut t = Trajectory::new(start);
             let mut samples = Vec::new();
+            let done_before = (i * cfg.params.cycles) as f64;
             let (end, steps) = cfg
                 .hopper
                 .run_with_samples(start, cfg.params.cycles, &opts, &mut samples, &mut |c| {
@@ -178,11 +195,15 @@ impl System for HopperSystem {
                         trajectory: i + 1,
                         cycle: *c,
                     });
+                    if c.index % 4096 == 0 {
+                        bar.update([done_before + c.index as f64]);
+                    }
                 })
                 .map_err(Failure::scene)?;
             t.finish(end, steps, samples);
             trajectories.push(t);
         }
+        bar.finish();
         Ok(HopperOutcome::new(
             cfg,
             trajectories,

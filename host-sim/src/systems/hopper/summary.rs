@@ -7,9 +7,10 @@ use super::closed::{none_reason, ClosedForm, ALPHA_DOUBLING};
 use super::{
     end_name, model_equation, model_name, start_height, start_text, HopperConfig, PERIOD_TOL,
 };
-use crate::model::hopper::analysis::{detect_period, MAX_PERIOD};
+use crate::model::hopper::analysis::MAX_PERIOD;
 use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Cycle, RunEnd, Sample, Start};
+use crate::period::Tolerance;
 use crate::stream::Tail;
 use crate::systems::Outcome;
 use serde_json::{json, Value};
@@ -17,33 +18,19 @@ use serde_json::{json, Value};
 /// Late values reported per trajectory.
 pub const LATE: usize = 8;
 
-/// Cycles each trajectory keeps: at least the 3 x [`MAX_PERIOD`] [`period_of`] looks at.
-pub const TAIL_CYCLES: usize = 4 * MAX_PERIOD;
+/// Cycles each trajectory keeps: what [`period_of`] looks at for periods up to
+/// [`MAX_PERIOD`].
+pub const TAIL_CYCLES: usize = crate::period::values_needed(MAX_PERIOD);
 
-/// Largest relative change of a period-p orbit's spread (max - min over p values) across
-/// the last [`SETTLE_WINDOW`] values for the orbit to count as settled.
-pub const SETTLE_REL: f64 = 1e-6;
-/// Values over which a period >= 2 must hold its spread.
-pub const SETTLE_WINDOW: usize = 64;
-
-/// The period of a sequence of energies whose last values are `e` (of `total` in all):
-/// `detect_period` (tolerance [`PERIOD_TOL`]); a period p >= 2 must also hold its spread
-/// (near a doubling a slowly decaying alternation passes the period-2 test), else `None`
-/// (not settled). Looks at the last 3 x [`MAX_PERIOD`] values at most.
+/// The period the energies whose last values are `e` (of `total` in all) have provably
+/// settled to: [`crate::period::settled_period`] with the tolerance [`PERIOD_TOL`]
+/// (`|a - b| <= tol (1 + |a|)`), periods up to [`MAX_PERIOD`] (and `total / 3`); `None`
+/// (not settled) if the orbit is still converging (near a doubling a slowly decaying
+/// alternation repeats with twice the period long before it settles), aperiodic or too
+/// short.
 pub fn period_of(e: &[f64], total: usize) -> Option<usize> {
-    let p = detect_period(e, MAX_PERIOD.min(total / 3).max(1), PERIOD_TOL)?;
-    if p == 1 {
-        return Some(1);
-    }
-    let n = e.len();
-    let w = SETTLE_WINDOW.max(2 * p).min(n);
-    let spread = |a: usize| {
-        let s = &e[a..a + p];
-        s.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-            - s.iter().copied().fold(f64::INFINITY, f64::min)
-    };
-    let (first, last) = (spread(n - w), spread(n - p));
-    ((last - first).abs() <= SETTLE_REL * last.abs()).then_some(p)
+    let max = MAX_PERIOD.min(total / 3).max(1);
+    crate::period::settled_period(e, max, Tolerance::Mixed(PERIOD_TOL))
 }
 
 /// One simulated start, kept in bounded memory.
@@ -175,6 +162,22 @@ impl Outcome for HopperOutcome {
 
     fn json(&self) -> Result<String, String> {
         Ok(summary_json(self).to_string())
+    }
+
+    /// An integrator at its step cap, or a non-finite state, is not the hopper's physics.
+    fn shortfall(&self) -> Option<String> {
+        let (i, t) = self
+            .trajectories
+            .iter()
+            .enumerate()
+            .find(|(_, t)| matches!(t.end, RunEnd::StepCap | RunEnd::NonFinite))?;
+        Some(format!(
+            "trajectory {} ended after {} of {} cycles: {}",
+            i + 1,
+            t.cycles,
+            self.cfg.params.cycles,
+            end_name(t.end)
+        ))
     }
 }
 
@@ -332,7 +335,7 @@ fn trajectory_text(i: usize, t: &Trajectory, cf: Option<&ClosedForm>) -> String 
     }
     let period = t
         .period
-        .map_or("none detected (not settled or aperiodic)".into(), |p| {
+        .map_or("not settled (still converging, or aperiodic)".into(), |p| {
             p.to_string()
         });
     s += &format!("    period {period}\n");

@@ -178,7 +178,7 @@ impl SweepReport<HopperSystem> for HopperSweepReport {
                 self.key,
                 format!("{v:.6}"),
                 alpha.map_or(String::new(), |a| format!("alpha = {a:.6}  ")),
-                period.map_or("none".into(), |q| q.to_string()),
+                period.map_or("not settled".into(), |q| q.to_string()),
                 if end == RunEnd::Completed {
                     String::new()
                 } else {

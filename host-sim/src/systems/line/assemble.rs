@@ -89,7 +89,7 @@ fn with_surface<F: Flight, J: Jitter>(
             let table = Table {
                 height_m: s.table.height_m,
             };
-            free_run(s, o, plant(s, flight, table, jitter), rec);
+            free_run(s, o, plant(s, flight, table, jitter), rec)?;
         }
         ControlMode::IdealMirror => {
             let target = s
@@ -99,7 +99,7 @@ fn with_surface<F: Flight, J: Jitter>(
             let g = s.physics.gravity_mps2;
             let law = MirrorLaw::new(s.kappa0(), s.control.kappa1_s2pm2, target, g)
                 .map_err(|e| super::validate::param_error(&e))?;
-            free_run(s, o, plant(s, flight, IdealMirror { law }, jitter), rec);
+            free_run(s, o, plant(s, flight, IdealMirror { law }, jitter), rec)?;
         }
         ControlMode::Sil => {
             let a = &s.actuator;

@@ -2,9 +2,9 @@
 //! mirror), and at the controller's fixed rate with a sensor frame per step and the command
 //! held for the period.
 
-use super::run::{Recorder, RunError, RunOptions, MAX_PHASE_SAMPLES};
+use super::run::{End, Recorder, RunError, RunOptions, MAX_PHASE_SAMPLES};
 use super::scene::Scene;
-use crate::controller::StepController;
+use crate::controller::{Counted, StepController};
 use crate::effects::jitter::Jitter;
 use crate::effects::sensor::Sensor;
 use crate::engine::Flight;
@@ -16,11 +16,17 @@ use std::time::Instant;
 
 /// Impacts between progress updates of an event-driven run.
 const CHUNK_IMPACTS: u64 = 10_000;
-/// Runs shorter than this many impacts show no progress bar.
-const PROGRESS_MIN_IMPACTS: u64 = 10_000;
 
-fn bar(o: &RunOptions, total: u64) -> indicatif::ProgressBar {
-    progress::bar(total, "impacts", o.progress && total > PROGRESS_MIN_IMPACTS)
+/// The progress of a run of `s` towards whichever of its limits (impacts, time) it reaches
+/// first; shown on a terminal once the run has taken a while ([`progress::Progress`]).
+fn bar(o: &RunOptions, s: &Scene) -> progress::Progress {
+    progress::Progress::new(
+        [
+            (s.stop.impacts as f64, "impacts"),
+            (s.stop.duration_s, "s simulated"),
+        ],
+        o.progress,
+    )
 }
 
 /// The plant's counters into the outcome.
@@ -40,61 +46,96 @@ fn finish<F: Flight, S: Surface, J: Jitter>(
     out.final_ball = plant.ball;
 }
 
-/// Impact-to-impact run without a controller (table, ideal mirror).
+/// Impact-to-impact run without a controller (table, ideal mirror): to the impact limit,
+/// the time limit, or resting contact on a table. Every call of the plant either adds
+/// impacts or advances time; one that does neither is an error, never a silent end.
 pub(super) fn free_run<F: Flight, S: Surface, J: Jitter>(
     s: &Scene,
     o: &RunOptions,
     mut plant: LinePlant<F, S, J>,
     rec: &mut Recorder,
-) {
+) -> Result<(), RunError> {
     let start = Instant::now();
     let total = s.stop.impacts;
-    let pb = bar(o, total);
-    // every iteration either adds CHUNK_IMPACTS impacts or ends the run
-    for _ in 0..=(total / CHUNK_IMPACTS + 1) {
+    let mut pb = bar(o, s);
+    let end = loop {
         let goal = (plant.impacts + CHUNK_IMPACTS).min(total);
+        let before = (plant.impacts, plant.time_s);
         match plant.advance_to(s.stop.duration_s, goal, &mut |r| rec.push(r)) {
-            Advance::ImpactLimit if plant.impacts < total => pb.set_position(plant.impacts),
-            Advance::SegmentCap => pb.set_position(plant.impacts),
-            _ => break,
+            Advance::ImpactLimit if plant.impacts >= total => break End::Impacts,
+            Advance::ImpactLimit => {}
+            Advance::SegmentCap if (plant.impacts, plant.time_s) == before => {
+                return Err(stalled(&plant, "the flight makes no progress"));
+            }
+            Advance::SegmentCap => {}
+            Advance::RestForever => break End::Resting,
+            Advance::Reached => break End::Duration,
         }
-    }
-    pb.finish_and_clear();
+        pb.update([plant.impacts as f64, plant.time_s]);
+    };
+    pb.finish();
     finish(rec, &plant, start);
+    rec.out.end = end;
+    Ok(())
 }
 
-/// Advance `plant` to the end of control period `t_next_s`, taking the sensor's samples
-/// at their times; true if the impact limit `total` was reached.
+/// The error of a plant that stopped advancing at its current time.
+fn stalled<F: Flight, S: Surface, J: Jitter>(plant: &LinePlant<F, S, J>, why: &str) -> RunError {
+    RunError::Stalled(format!(
+        "{why} at t = {} s after {} impacts",
+        plant.time_s, plant.impacts
+    ))
+}
+
+/// Most consecutive [`Advance::SegmentCap`] returns (each a million flight segments)
+/// within one stretch between sensor samples before the run is declared stalled.
+const MAX_SEGMENT_CAPS: u32 = 64;
+
+/// Advance `plant` to `target_s` (or the impact limit `total`); true if that limit was
+/// reached. A plant still short of the target after [`MAX_SEGMENT_CAPS`] calls is stalled.
+fn advance_stretch<F: Flight, S: Surface, J: Jitter>(
+    plant: &mut LinePlant<F, S, J>,
+    target_s: f64,
+    total: u64,
+    rec: &mut Recorder,
+) -> Result<bool, RunError> {
+    for _ in 0..MAX_SEGMENT_CAPS {
+        match plant.advance_to(target_s, total, &mut |r| rec.push(r)) {
+            Advance::SegmentCap => continue,
+            adv => return Ok(adv == Advance::ImpactLimit),
+        }
+    }
+    Err(stalled(
+        plant,
+        "a million flight segments did not reach the next sample",
+    ))
+}
+
+/// Advance `plant` to the end of control period `t_next_s`, taking the sensor's samples at
+/// their times (at most `samples` of them fall in one period; the loop is bounded by that
+/// and fails rather than end the period early); true if the impact limit `total` was
+/// reached.
 fn advance_period<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
     plant: &mut LinePlant<F, S, J>,
     sensor: &mut Z,
-    t_next_s: f64,
+    (t_next_s, samples): (f64, u64),
     total: u64,
     rec: &mut Recorder,
-) -> bool {
-    // sub-segments end at sample times; at most a bounded number per step
-    for _ in 0..4096 {
+) -> Result<bool, RunError> {
+    // each sample is one pass that takes it and one that advances to it, plus the last
+    // stretch to the period's end
+    for _ in 0..2 * samples + 4 {
+        if plant.time_s >= t_next_s {
+            return Ok(false);
+        }
         let ts = sensor.next_sample_time_s();
         if ts <= plant.time_s {
             sensor.sample(plant.time_s, plant.ball.height_m);
-            continue;
-        }
-        let target = ts.min(t_next_s);
-        let mut adv = Advance::SegmentCap;
-        for _ in 0..64 {
-            adv = plant.advance_to(target, total, &mut |r| rec.push(r));
-            if adv != Advance::SegmentCap {
-                break;
-            }
-        }
-        if adv == Advance::ImpactLimit {
-            return true;
-        }
-        if plant.time_s >= t_next_s {
-            break;
+        } else if advance_stretch(plant, ts.min(t_next_s), total, rec)? {
+            return Ok(true);
         }
     }
-    false
+    Err(stalled(plant, "the control period did not complete"))
 }
 
 /// The frame of control step `k` at `t_k_s`, after taking the samples due now.
@@ -104,10 +145,9 @@ fn frame<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
     k: u64,
     t_k_s: f64,
 ) -> SensorFrame {
-    let mut guard = 0;
-    while sensor.next_sample_time_s() <= plant.time_s && guard < 1024 {
+    // advance_period took every sample before t_k: at most the one at t_k is due
+    while sensor.next_sample_time_s() <= plant.time_s {
         sensor.sample(plant.time_s, plant.ball.height_m);
-        guard += 1;
     }
     let paddle = plant.surface.state(&plant.ball);
     let (seq, z) = sensor.frame(k, t_k_s, plant.ball.height_m);
@@ -119,7 +159,18 @@ fn frame<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
     }
 }
 
-/// Fixed-rate run: a sensor frame at every control step, the command held for the period.
+/// Sensor samples that fall within one control period of `s` (at most; 0 for a sensor
+/// that samples only at control steps).
+fn samples_per_period(s: &Scene) -> u64 {
+    s.sensor.as_ref().map_or(0, |x| {
+        let rate = x.rate_hz.unwrap_or(s.control.rate_hz);
+        (rate / s.control.rate_hz).ceil() as u64 + 1
+    })
+}
+
+/// Fixed-rate run: a sensor frame at every control step, the command held for the period;
+/// to the impact limit or the time limit (every period is simulated whole). The
+/// controller is stepped through [`Counted`], which counts its safe-state steps.
 pub(super) fn stepped_run<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
     s: &Scene,
     o: &RunOptions,
@@ -129,19 +180,21 @@ pub(super) fn stepped_run<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
     rec: &mut Recorder,
 ) -> Result<(), RunError> {
     let start = Instant::now();
+    let mut ctrl = Counted::new(ctrl);
     let dt = 1.0 / s.control.rate_hz;
     let total = s.stop.impacts;
     let max_steps = (s.stop.duration_s / dt).ceil() as u64;
-    let pb = bar(o, total);
+    let samples = samples_per_period(s);
+    let mut pb = bar(o, s);
     let phase_every = (max_steps / MAX_PHASE_SAMPLES as u64).max(1);
-    let mut steps = 0u64;
+    let mut end = End::Duration;
     for k in 0..max_steps {
         if plant.impacts >= total {
+            end = End::Impacts;
             break;
         }
         let frame = frame(&plant, &mut sensor, k, k as f64 * dt);
         let step = ctrl.step(&frame)?;
-        steps += 1;
         plant
             .surface
             .command(f64::from(step.command.paddle_accel_mps2));
@@ -149,16 +202,20 @@ pub(super) fn stepped_run<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
         if o.record_phase && k % phase_every == 0 && phase.len() < MAX_PHASE_SAMPLES {
             phase.push((plant.ball.height_m, plant.ball.velocity_mps));
         }
-        if advance_period(&mut plant, &mut sensor, (k + 1) as f64 * dt, total, rec) {
+        let t_next = (k + 1) as f64 * dt;
+        if advance_period(&mut plant, &mut sensor, (t_next, samples), total, rec)? {
+            end = End::Impacts;
             break;
         }
-        if k % 1000 == 0 {
-            pb.set_position(plant.impacts);
+        if k % 1024 == 0 {
+            pb.update([plant.impacts as f64, plant.time_s]);
         }
     }
-    pb.finish_and_clear();
+    pb.finish();
     finish(rec, &plant, start);
-    rec.out.control_steps = steps;
+    rec.out.end = end;
+    rec.out.control_steps = ctrl.safe.steps;
     rec.out.hil = ctrl.hil_report();
+    rec.out.safe = ctrl.safe;
     Ok(())
 }

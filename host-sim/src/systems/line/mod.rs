@@ -31,7 +31,7 @@ use self::scene::{ControlMode, Scene};
 use self::summary::Summary;
 use self::trace::ImpactRow;
 use super::{Outcome, System};
-use crate::controller::{HilReport, StepController};
+use crate::controller::{HilReport, SafeSteps, StepController};
 use crate::output::{json_text, JsonStyle};
 use crate::scene::{SceneError, SceneFile};
 use crate::verbs::{Failure, RunLength, Setup, SweepRequest};
@@ -62,18 +62,24 @@ impl Outcome for LineOutcome {
     fn attach_hil(&mut self, report: HilReport) {
         self.summary.hil = Some(report);
     }
+    fn safe_steps(&self) -> Option<&SafeSteps> {
+        (self.summary.control_steps > 0).then_some(&self.summary.safe)
+    }
 }
 
-/// The error of closing a loop through an external controller on a scene without one.
+/// The error of closing a loop through an external controller (`--hil`) on a scene
+/// without one: it names the mode (exit 2, before anything starts).
 fn needs_sil(scene: &Scene) -> SceneError {
-    let mode = match scene.control.mode {
-        ControlMode::None => "none",
-        ControlMode::IdealMirror => "ideal_mirror",
-        ControlMode::Sil => "sil",
+    let (mode, what) = match scene.control.mode {
+        ControlMode::None => ("none", "a passive scene"),
+        ControlMode::IdealMirror => ("ideal_mirror", "the ideal-mirror scene"),
+        ControlMode::Sil => ("sil", "this scene"),
     };
     SceneError::new(
         "control.mode",
-        format!("is \"{mode}\": an external controller (--hil) needs \"sil\""),
+        format!(
+            "is \"{mode}\": {what} has no controller to put on the target (--hil needs control.mode = \"sil\")"
+        ),
     )
 }
 

@@ -10,7 +10,7 @@
 use super::scene::{ControlMode, Scene};
 use super::summary::ApexStats;
 use super::trace::ImpactRow;
-use crate::controller::{ControllerError, HilReport, StepController};
+use crate::controller::{ControllerError, HilReport, SafeSteps, StepController};
 use crate::model::line::RestEvent;
 use crate::scene::SceneError;
 use dexter_core::state::BallState;
@@ -38,6 +38,9 @@ pub enum RunError {
     Scene(SceneError),
     /// The controller failed.
     Controller(ControllerError),
+    /// The plant stopped advancing before the run's end (an internal cap was hit: the run
+    /// fails rather than end early).
+    Stalled(String),
 }
 
 impl std::fmt::Display for RunError {
@@ -45,8 +48,22 @@ impl std::fmt::Display for RunError {
         match self {
             RunError::Scene(e) => write!(f, "scene error: {e}"),
             RunError::Controller(e) => write!(f, "{e}"),
+            RunError::Stalled(e) => write!(f, "the simulation stalled: {e}"),
         }
     }
+}
+
+/// Which of its limits ended a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum End {
+    /// The requested impacts (`stop.impacts`, `--impacts`) were simulated.
+    Impacts,
+    /// The time limit (`stop.duration_s`, `--duration`) was reached.
+    #[default]
+    Duration,
+    /// The ball came to rest on a fixed table: no impact will follow.
+    Resting,
 }
 
 impl std::error::Error for RunError {}
@@ -96,6 +113,10 @@ pub struct RunOutcome {
     pub final_ball: BallState<f64>,
     /// HIL timing and link figures, if the controller ran on a target.
     pub hil: Option<HilReport>,
+    /// Which limit ended the run.
+    pub end: End,
+    /// The controller's safe-state steps (none without a controller).
+    pub safe: SafeSteps,
 }
 
 impl RunOutcome {
@@ -117,6 +138,8 @@ impl RunOutcome {
             phase: Vec::new(),
             final_ball: BallState::default(),
             hil: None,
+            end: End::Duration,
+            safe: SafeSteps::default(),
         }
     }
 }

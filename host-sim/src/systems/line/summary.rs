@@ -2,22 +2,20 @@
 //! timing; as human-readable text or one JSON object. The apex statistics are kept in
 //! constant memory as the run goes ([`ApexStats`]).
 
-use super::run::RunOutcome;
+use super::run::{End, RunOutcome};
 use super::scene::{ControlMode, Scene};
 use crate::controller::HilReport;
+use crate::controller::SafeSteps;
 use crate::stream::Tail;
 use serde::Serialize;
 
 /// Fewest trailing in-band apexes for a run to count as converged.
 pub const MIN_CONVERGED_TAIL: usize = 5;
 
-/// Apexes one period is checked over ([`detect_period`] needs `5 p` of them).
-const PERIOD_SPAN: usize = 5;
-
 /// The apex sequence of a run in constant memory: the last apex, the count, the length of
 /// the trailing run of apexes within the convergence band, and the last
-/// 5 x `analysis.max_period` apexes. [`converged_after`] and [`detect_period`] on these
-/// give the same answers as on the whole sequence.
+/// [`crate::period::values_needed`]`(analysis.max_period)` apexes. [`converged_after`] and
+/// [`detect_period`] on these give the same answers as on the whole sequence.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ApexStats {
     target: Option<f64>,
@@ -39,7 +37,7 @@ impl ApexStats {
             target,
             band_m: target.map_or(0.0, |t| an.converge_tolerance * t.abs()),
             in_band_tail: 0,
-            tail: Tail::new(PERIOD_SPAN * an.max_period as usize),
+            tail: Tail::new(crate::period::values_needed(an.max_period as usize)),
             max_period: an.max_period,
             period_tolerance: an.period_tolerance,
         }
@@ -99,7 +97,8 @@ pub struct Summary {
     /// Impacts after which every apex stayed within `analysis.converge_tolerance` of the
     /// target (null if it never settled there, or did for fewer than 5 impacts).
     pub converged_after_impacts: Option<u64>,
-    /// Period of the apex sequence at the end, impacts (null if none found or resting).
+    /// Period the apex sequence has settled to at the end, impacts ([`detect_period`];
+    /// null if it has not settled to one, or rests).
     pub period: Option<u32>,
     /// True if the ball came to resting contact (a Zeno sequence) at any time.
     pub resting_contact: bool,
@@ -107,8 +106,19 @@ pub struct Summary {
     pub resting_since_s: Option<f64>,
     /// Impacts before the first resting contact.
     pub resting_after_impacts: Option<u64>,
+    /// True if a resting contact was forced by the cap `zeno.max_impacts_per_segment`
+    /// rather than detected (present only then).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub resting_forced: bool,
     /// Grazing contacts (zero relative speed).
     pub grazing_contacts: u64,
+    /// Which limit ended the run: `impacts` (the requested impacts), `duration` (the time
+    /// limit) or `resting` (the ball rests on a fixed table).
+    pub end: End,
+    /// Control steps answered in the controller's safe state (`safe_steps`), and by fault
+    /// (`faults`: fault name to count).
+    #[serde(flatten)]
+    pub safe: SafeSteps,
     /// HIL figures (only with `--hil`).
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub hil: Option<HilReport>,
@@ -130,18 +140,13 @@ pub fn converged_after(apexes: &[f64], target: f64, tol: f64) -> Option<u64> {
     }
 }
 
-/// The smallest period p <= `max_period` such that the last `4 p` apexes each equal the one
-/// p before within `tol` (relative); needs `5 p` apexes.
+/// The smallest period p <= `max_period` the apex sequence has provably settled to, with
+/// apexes one period apart equal within `tol` (relative): [`crate::period::settled_period`]
+/// (the values can no longer move by more than `tol`, and the orbit is not still converging
+/// to a shorter period); `None` if it has not settled.
 pub fn detect_period(apexes: &[f64], max_period: u32, tol: f64) -> Option<u32> {
-    let n = apexes.len();
-    (1..=max_period).find(|&p| {
-        let p = p as usize;
-        n >= 5 * p
-            && (n - 4 * p..n).all(|i| {
-                let (a, b) = (apexes[i], apexes[i - p]);
-                (a - b).abs() <= tol * a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
-            })
-    })
+    let tol = crate::period::Tolerance::Relative(tol);
+    crate::period::settled_period(apexes, max_period as usize, tol).map(|p| p as u32)
 }
 
 impl Summary {
@@ -168,8 +173,20 @@ impl Summary {
             resting_contact: out.rest_count > 0,
             resting_since_s: first_rest.map(|r| r.time_s),
             resting_after_impacts: first_rest.map(|r| r.after_impacts),
+            resting_forced: out.rests.iter().any(|r| r.forced),
             grazing_contacts: out.grazing_contacts,
+            end: out.end,
+            safe: out.safe.clone(),
             hil: out.hil,
+        }
+    }
+
+    /// Which limit ended the run, in words.
+    fn end_text(&self) -> &'static str {
+        match self.end {
+            End::Impacts => "at the requested impacts",
+            End::Duration => "at the time limit (stop.duration_s)",
+            End::Resting => "resting on the table (no impact follows)",
         }
     }
 
@@ -196,7 +213,7 @@ impl Summary {
         s += &format!(
             "period           {}\n",
             self.period
-                .map_or("none detected".to_string(), |p| p.to_string())
+                .map_or("not settled".to_string(), |p| p.to_string())
         );
         s += &format!(
             "resting contact  {}\n",
@@ -205,24 +222,20 @@ impl Summary {
                 _ => "no".to_string(),
             }
         );
+        if self.resting_forced {
+            s +=
+                "                 (forced: zeno.max_impacts_per_segment impacts within one step)\n";
+        }
         s += &format!("impacts          {}\n", self.impacts);
+        s += &format!("ended            {}\n", self.end_text());
         if self.control_steps > 0 {
             s += &format!("control steps    {}\n", self.control_steps);
         }
+        s += &self.safe.text();
         s += &format!("sim time         {:.6} s\n", self.sim_time_s);
         s += &format!("wall time        {:.6} s\n", self.wall_time_s);
         if let Some(h) = &self.hil {
-            s += &format!(
-                "HIL              {} mismatches, {} link errors, {} timeouts, {} over budget, steps/s {:.0}, instr min/mean/max {}/{:.1}/{}\n",
-                h.sil_mismatches,
-                h.link_errors,
-                h.link_timeouts,
-                h.over_budget_steps,
-                h.steps_per_wall_second,
-                h.step_instructions_min,
-                h.step_instructions_mean,
-                h.step_instructions_max
-            );
+            s += &h.text();
         }
         s
     }
@@ -281,7 +294,7 @@ mod tests {
             .map(|i| if i % 2 == 0 { 1.2 } else { 0.7 })
             .collect();
         assert_eq!(detect_period(&p2, 8, 1e-6), Some(2));
-        assert_eq!(detect_period(&[1.0; 10], 8, 1e-6), Some(1));
+        assert_eq!(detect_period(&[1.0; 20], 8, 1e-6), Some(1));
         let chaos: Vec<f64> = (0..50).map(|i| (i as f64 * 1.7).sin()).collect();
         assert_eq!(detect_period(&chaos, 8, 1e-6), None);
     }

@@ -1,9 +1,13 @@
 //! `dexter sweep` on a line scene: the scene run at every value of one key, keeping the
 //! last `--keep` apexes of each run: a bifurcation diagram (e.g. over
-//! `control.kappa1_s2pm2`). CSV: `KEY,apex_height_m`, one row per kept apex.
+//! `control.kappa1_s2pm2`). CSV: `KEY,period,end,apex_height_m`, one row per kept apex:
+//! the period the run's apexes settled to (empty if not settled: still converging near a
+//! doubling, or aperiodic; see the summary's `period`) and which limit ended the run
+//! (`impacts`, `duration`: the time limit cut it short, `resting`).
 
-use super::run::{run_streaming, RunError, RunOptions};
+use super::run::{run_streaming, End, RunError, RunOptions};
 use super::scene::Scene;
+use super::summary::Summary;
 use super::LineSystem;
 use crate::output::Sig17;
 use crate::plot;
@@ -12,24 +16,52 @@ use crate::verbs::{Failure, SweepBase, SweepReport, Sweeps};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// The late apexes of one run, m.
-pub struct LatePoint(Vec<f64>);
+/// One run of a sweep: its late apexes (m), settled period and end.
+pub struct LatePoint {
+    apexes: Vec<f64>,
+    period: Option<u32>,
+    end: End,
+}
 
-/// Run the scene `table` with `key` = `value` and keep its last `keep` apexes, m.
+/// Run the scene `table` with `key` = `value`: its last `keep` apexes, its period and
+/// what ended it.
+fn late_point(
+    table: &toml::Table,
+    key: &str,
+    value: f64,
+    keep: usize,
+) -> Result<LatePoint, RunError> {
+    let mut t = table.clone();
+    crate::scene::apply_set(&mut t, key, toml::Value::Float(value))?;
+    let scene = Scene::from_table(t)?;
+    let mut tail = Tail::new(keep);
+    let out = run_streaming(&scene, &RunOptions::default(), None, &mut |r| {
+        tail.push(r.apex_height_m)
+    })?;
+    Ok(LatePoint {
+        apexes: tail.iter().copied().collect(),
+        period: Summary::new(&scene, &out).period,
+        end: out.end,
+    })
+}
+
+/// The end's name in the CSV.
+fn end_name(e: End) -> &'static str {
+    match e {
+        End::Impacts => "impacts",
+        End::Duration => "duration",
+        End::Resting => "resting",
+    }
+}
+
+/// [`late_point`]'s apexes.
 fn late_apexes(
     table: &toml::Table,
     key: &str,
     value: f64,
     keep: usize,
 ) -> Result<Vec<f64>, RunError> {
-    let mut t = table.clone();
-    crate::scene::apply_set(&mut t, key, toml::Value::Float(value))?;
-    let scene = Scene::from_table(t)?;
-    let mut tail = Tail::new(keep);
-    run_streaming(&scene, &RunOptions::default(), None, &mut |r| {
-        tail.push(r.apex_height_m)
-    })?;
-    Ok(tail.iter().copied().collect())
+    Ok(late_point(table, key, value, keep)?.apexes)
 }
 
 /// Run `base` (a scene table, overrides applied) at every value of `range`, keeping the
@@ -60,8 +92,8 @@ impl Sweeps for LineSystem {
     type Report = LineSweepReport;
 
     fn point(base: &SweepBase<Self>, x: f64, _: Option<f64>) -> Result<LatePoint, Failure> {
-        let late = late_apexes(&base.table, &base.grid.x.key, x, base.keep);
-        late.map(LatePoint).map_err(|e| match e {
+        let late = late_point(&base.table, &base.grid.x.key, x, base.keep);
+        late.map_err(|e| match e {
             RunError::Scene(s) => Failure::scene(s),
             other => Failure::run(other),
         })
@@ -78,7 +110,7 @@ impl Sweeps for LineSystem {
 
 impl SweepReport<LineSystem> for LineSweepReport {
     fn csv_header(&self) -> String {
-        format!("{},apex_height_m", self.key)
+        format!("{},period,end,apex_height_m", self.key)
     }
 
     fn write_csv(
@@ -88,14 +120,16 @@ impl SweepReport<LineSystem> for LineSweepReport {
         p: &LatePoint,
         w: &mut dyn Write,
     ) -> std::io::Result<()> {
-        for &a in &p.0 {
-            writeln!(w, "{},{}", Sig17(x), Sig17(a))?;
+        let period = p.period.map_or(String::new(), |q| q.to_string());
+        let end = end_name(p.end);
+        for &a in &p.apexes {
+            writeln!(w, "{},{period},{end},{}", Sig17(x), Sig17(a))?;
         }
         Ok(())
     }
 
     fn add(&mut self, x: f64, _: Option<f64>, p: LatePoint) {
-        for a in p.0 {
+        for a in p.apexes {
             self.points.push((x, a));
         }
     }

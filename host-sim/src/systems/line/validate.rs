@@ -1,6 +1,7 @@
 //! Range and cross-field checks; every error names the dotted key.
 
 use super::scene::*;
+use crate::effects::sensor::MAX_PENDING;
 use crate::scene::SceneError;
 use dexter_core::control::ControllerParams;
 use dexter_core::estimate::EstimatorParams;
@@ -10,6 +11,23 @@ use dexter_core::track::PaddleLimits;
 /// Longest period `analysis.max_period` may ask for: the summary keeps the last
 /// 5 x `max_period` apexes (`summary::ApexStats`).
 pub const MAX_PERIOD: u32 = 1024;
+
+/// Fastest control loop, Hz (`control.rate_hz`): 100 kHz, ten times what the firmware's
+/// step budget allows on its 25 MHz target; a run's control steps are
+/// `stop.duration_s x control.rate_hz`.
+pub const MAX_CONTROL_RATE_HZ: f64 = 1e5;
+
+/// Fastest ball sensor, Hz (`sensor.rate_hz`): each sample is an event of the plant, so a
+/// run simulates `stop.duration_s x sensor.rate_hz` of them.
+pub const MAX_SENSOR_RATE_HZ: f64 = 1e6;
+
+/// Shortest drag integrator step, s (`drag.step_s`): a flight second is at most a
+/// million steps (RK4).
+pub const MIN_DRAG_STEP_S: f64 = 1e-6;
+
+/// Tightest drag tolerance, m (`drag.tolerance`, RK45): a tolerance near the rounding of
+/// the height (1e-16 m per metre) cannot be met and would shrink the step without end.
+pub const MIN_DRAG_TOLERANCE_M: f64 = 1e-12;
 
 fn finite(key: &str, v: f64) -> Result<f64, SceneError> {
     if v.is_finite() {
@@ -35,6 +53,39 @@ fn non_negative(key: &str, v: f64) -> Result<f64, SceneError> {
         Ok(v)
     } else {
         Err(SceneError::new(key, format!("must be >= 0, got {v}")))
+    }
+}
+
+/// A number as a user reads it: plain, or in e-notation when tiny or huge.
+fn num(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// `v` in (0, `max`]; `why` says what the bound protects.
+fn up_to(key: &str, v: f64, max: f64, why: &str) -> Result<f64, SceneError> {
+    if positive(key, v)? <= max {
+        Ok(v)
+    } else {
+        Err(SceneError::new(
+            key,
+            format!("must be <= {} ({why}), got {}", num(max), num(v)),
+        ))
+    }
+}
+
+/// `v` >= `min`; `why` says what the bound protects.
+fn at_least(key: &str, v: f64, min: f64, why: &str) -> Result<f64, SceneError> {
+    if finite(key, v)? >= min {
+        Ok(v)
+    } else {
+        Err(SceneError::new(
+            key,
+            format!("must be >= {} ({why}), got {}", num(min), num(v)),
+        ))
     }
 }
 
@@ -96,7 +147,12 @@ impl Scene {
             ));
         }
         if c.mode == ControlMode::Sil {
-            positive("control.rate_hz", c.rate_hz)?;
+            up_to(
+                "control.rate_hz",
+                c.rate_hz,
+                MAX_CONTROL_RATE_HZ,
+                "the run steps the controller stop.duration_s x control.rate_hz times",
+            )?;
             // the core validates its own parameters; map its names to scene keys
             self.controller_params()?
                 .validate()
@@ -156,20 +212,40 @@ impl Scene {
     /// `[sensor]`, `[jitter]`, `[drag]` when present.
     fn validate_effects(&self) -> Result<(), SceneError> {
         if let Some(s) = &self.sensor {
-            if let Some(r) = s.rate_hz {
-                positive("sensor.rate_hz", r)?;
-            }
+            let rate = match s.rate_hz {
+                Some(r) => up_to(
+                    "sensor.rate_hz",
+                    r,
+                    MAX_SENSOR_RATE_HZ,
+                    "each sample is an event the run simulates",
+                )?,
+                None => self.control.rate_hz,
+            };
             non_negative("sensor.noise_sigma_m", s.noise_sigma_m)?;
             non_negative("sensor.latency_s", s.latency_s)?;
             non_negative("sensor.quantization_m", s.quantization_m)?;
+            let in_flight = s.latency_s * rate;
+            if in_flight > MAX_PENDING as f64 {
+                return Err(SceneError::new(
+                    "sensor.latency_s",
+                    format!("x sensor.rate_hz is {in_flight} samples in flight, more than the {MAX_PENDING} the sensor holds"),
+                ));
+            }
         }
         if let Some(j) = &self.jitter {
             non_negative("jitter.sigma_s", j.sigma_s)?;
         }
         if let Some(d) = &self.drag {
             non_negative("drag.coefficient_per_m", d.coefficient_per_m)?;
-            positive("drag.step_s", d.step_s)?;
-            positive("drag.tolerance", d.tolerance)?;
+            let steps = "at most a million integrator steps per simulated second";
+            at_least("drag.step_s", d.step_s, MIN_DRAG_STEP_S, steps)?;
+            let rounding = "a tighter one is below the rounding of the height";
+            at_least(
+                "drag.tolerance",
+                d.tolerance,
+                MIN_DRAG_TOLERANCE_M,
+                rounding,
+            )?;
         }
         Ok(())
     }

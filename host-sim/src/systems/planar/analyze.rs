@@ -133,7 +133,7 @@ fn analyze_text(name: &str, r: &AnalysisReport, model: &PlanarModel) -> String {
     );
     let _ = writeln!(
         o,
-        "  Jacobian:     central differences, Richardson x2; error estimate {:.1e}",
+        "  Jacobian:     central differences, Richardson, steps chosen per column; error estimate {:.1e}",
         r.jacobian_error
     );
     o += &eigenvalue_table(r, model);
@@ -148,10 +148,13 @@ fn analyze_text(name: &str, r: &AnalysisReport, model: &PlanarModel) -> String {
             "marginal (all |lambda| <= 1, some = 1: neutrally stable to first order)"
         }
         analysis::Verdict::AsymptoticallyStable => "asymptotically stable (all |lambda| < 1)",
+        analysis::Verdict::Unreliable => {
+            "unreliable (some |lambda| is within the eigenvalues' uncertainty of 1: the linearization cannot decide)"
+        }
     };
     let _ = writeln!(
         o,
-        "  verdict:      {verdict}; tolerance on |lambda| = 1: {:.1e}",
+        "  verdict:      {verdict}; eigenvalue uncertainty {:.1e}",
         r.verdict_tolerance
     );
     let _ = writeln!(o, "  regime:       {}", regime(r));

@@ -1,7 +1,7 @@
 //! The planar run's `--plot` pictures (SVG + PNG, stem = the scene file's stem):
 //! `-theta` (θ–θ̇ at impacts, rigid bodies), `-velocity` (ẋ–ẏ at impacts with the fixed
 //! point), `-path` (the centre of mass over the first flights) and `-energy` (η per impact
-//! with η* and the late mean). Series over all impacts keep at most
+//! with η* and the late mean), and on the real table `-filmstrip` ([`super::film`]). Series over all impacts keep at most
 //! [`crate::stream::PLOT_MAX_POINTS`] points.
 
 use super::trace::PlanarRow;
@@ -70,6 +70,13 @@ impl Plots<PlanarSystem> for PlanarPlots {
             )
         };
         let mut written = Vec::new();
+        if let Some(film) = &out.film {
+            let title = format!("{name}: body and table, first and last impacts");
+            let files = film
+                .write(&title, m.l_m(), dir, name)
+                .map_err(|e| Failure::run(format!("plot: {e}")))?;
+            written.extend(files);
+        }
         // fig. 4-5, upper: the orbit in the theta - theta' plane at the impacts
         if !matches!(m.body, Body::PointMass) {
             let pts = self.theta.values().to_vec();

@@ -2,9 +2,8 @@
 //! stability class, as text or one JSON object (`docs/planar.md`, "Command line").
 
 use crate::model::planar::analysis::{self, CellClass};
-use crate::model::planar::{
-    Body, ContactLaw, ImpactRecord, PlanarModel, PlanarParams, PlanarRun, RunEnd,
-};
+use crate::model::planar::stats::RunStats;
+use crate::model::planar::{Body, ContactLaw, PlanarModel, PlanarParams, RunEnd, Streamed};
 use dexter_core::tilt::kappa_crit;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -52,7 +51,8 @@ pub struct RunSummary {
     pub target_energy_jpkg: f64,
     /// eta at the first impact, J/kg.
     pub first_energy_jpkg: f64,
-    /// Impacts in the late window (the last quarter).
+    /// Impacts in the late window (the last quarter; of a run that ended early, at most
+    /// the last 65536 impacts).
     pub late_window_impacts: usize,
     /// Mean eta over the late window, J/kg.
     pub late_mean_energy_jpkg: f64,
@@ -66,21 +66,24 @@ pub struct RunSummary {
     pub mean_theta_rad: f64,
     /// The stability-map class of this run (`analysis::classify`).
     pub class: CellClass,
+    /// `ideal` (the paper's table) or `real` (`[real_table]`).
+    pub table: &'static str,
+    /// The run ended because |theta| reached the tip angle.
+    pub tipped_over: bool,
+    /// (late mean eta - eta*)/eta*, as `late_mean_energy_rel_error` (issue 11's name, the
+    /// same for both tables).
+    pub late_energy_error: f64,
+    /// max |theta| at impacts over the late window, rad, as `late_max_abs_theta_rad`.
+    pub late_theta_max_rad: f64,
+    /// The real table's figures (absent for the ideal table).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub real: Option<super::closed::RealFigures>,
     /// Gap evaluations of all contact searches.
     pub gap_evaluations: usize,
     /// Simulated time, s (= end_time_s).
     pub sim_time_s: f64,
     /// Wall-clock time of the simulation, s.
     pub wall_time_s: f64,
-}
-
-pub(super) fn law_angle(model: &PlanarModel, r: &ImpactRecord) -> f64 {
-    model.body.law_angle_rad(&r.before)
-}
-
-pub(super) fn max_abs_theta(model: &PlanarModel, rs: &[ImpactRecord]) -> f64 {
-    rs.iter()
-        .fold(0.0f64, |m, r| m.max(law_angle(model, r).abs()))
 }
 
 /// eq. 16's kappa_crit at the model's target energy (NaN for a point mass / no flight).
@@ -91,23 +94,18 @@ pub(super) fn kappa_crit_of(model: &PlanarModel) -> f64 {
     }
 }
 
+/// The summary of a run of `model` (scene `p`, `requested` impacts) whose impacts went
+/// through `stats` and which ended for `end` after `gap_evaluations` gap evaluations.
 pub(super) fn summarize(
     name: &str,
     p: &PlanarParams,
     model: &PlanarModel,
-    run: &PlanarRun,
-    requested: usize,
+    stats: &RunStats,
+    done: &Streamed,
     wall_s: f64,
 ) -> RunSummary {
-    let n = run.impacts.len();
-    let late = &run.impacts[n - (n / 4).max(1).min(n)..];
     let eta_star = model.feedback.target_energy_jpkg();
-    let late_mean = if late.is_empty() {
-        f64::NAN
-    } else {
-        late.iter().map(|r| r.energy_jpkg).sum::<f64>() / late.len() as f64
-    };
-    let end_time = run.impacts.last().map_or(0.0, |r| r.time_s);
+    let late = stats.late();
     RunSummary {
         scene: name.to_string(),
         body: match model.body {
@@ -128,38 +126,41 @@ pub(super) fn summarize(
         timing_noise_s: model.timing_noise_s,
         seed: p.seed,
         kappa_crit_eq16: kappa_crit_of(model),
-        impacts_requested: requested,
-        impacts: n,
-        end: run.end,
-        stayed_up: run.end == RunEnd::Completed,
-        end_time_s: end_time,
+        impacts_requested: p.impacts,
+        impacts: stats.impacts,
+        end: done.end,
+        stayed_up: done.end == RunEnd::Completed,
+        end_time_s: stats.end_time_s,
         target_energy_jpkg: eta_star,
-        first_energy_jpkg: run.impacts.first().map_or(f64::NAN, |r| r.energy_jpkg),
-        late_window_impacts: late.len(),
-        late_mean_energy_jpkg: late_mean,
-        late_mean_energy_rel_error: (late_mean - eta_star) / eta_star,
-        max_abs_theta_rad: max_abs_theta(model, &run.impacts),
-        late_max_abs_theta_rad: max_abs_theta(model, late),
-        mean_theta_rad: if n == 0 {
-            f64::NAN
-        } else {
-            run.impacts.iter().map(|r| law_angle(model, r)).sum::<f64>() / n as f64
-        },
-        class: analysis::classify(model, run),
-        gap_evaluations: run.gap_evaluations,
-        sim_time_s: end_time,
+        first_energy_jpkg: stats.first_energy_jpkg,
+        late_window_impacts: late.impacts,
+        late_mean_energy_jpkg: late.mean_energy_jpkg,
+        late_mean_energy_rel_error: (late.mean_energy_jpkg - eta_star) / eta_star,
+        max_abs_theta_rad: stats.max_abs_law_rad,
+        late_max_abs_theta_rad: late.max_abs_law_rad,
+        mean_theta_rad: stats.mean_law_rad(),
+        class: stats.class(done.end),
+        table: "ideal",
+        tipped_over: done.end == RunEnd::TippedOver,
+        late_energy_error: (late.mean_energy_jpkg - eta_star) / eta_star,
+        late_theta_max_rad: late.max_abs_law_rad,
+        real: None,
+        gap_evaluations: done.gap_evaluations,
+        sim_time_s: stats.end_time_s,
         wall_time_s: wall_s,
     }
 }
 
-fn end_words(end: RunEnd) -> &'static str {
+pub(super) fn end_words(end: RunEnd) -> &'static str {
     match end {
         RunEnd::Completed => "completed",
         RunEnd::TippedOver => "tipped over (|theta| reached the tip angle)",
         RunEnd::NoSeparation => "no separation (the body no longer flies off the table)",
-        RunEnd::NoContact => "no contact found",
+        RunEnd::NoContact => "no contact found (the body does not come back to the table)",
+        RunEnd::SearchCap => "the contact search hit its iteration cap (an internal limit)",
         RunEnd::Jam => "Painleve jam in a frictional impact",
         RunEnd::NonFinite => "a state became non-finite",
+        RunEnd::TimeLimit => "the time limit (real_table.max_duration_s) passed",
     }
 }
 
@@ -250,6 +251,9 @@ pub(super) fn summary_text(s: &RunSummary) -> String {
         s.max_abs_theta_rad, s.late_max_abs_theta_rad, s.mean_theta_rad
     );
     let _ = writeln!(o, "  class:        {}", class_words(s.class));
+    if let Some(r) = &s.real {
+        o += &r.text();
+    }
     let _ = writeln!(
         o,
         "  time:         simulated {:.3} s, wall {:.3} ms ({} gap evaluations)",

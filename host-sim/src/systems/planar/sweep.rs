@@ -2,17 +2,20 @@
 //! with the swept value(s) set, run for `planar.impacts` and classified by
 //! [`crate::model::planar::analysis::classify`]. CSV: the swept key(s), `class`, `impacts`, `end`,
 //! `max_abs_theta_rad`, `late_mean_energy_jpkg`, rows range2-major; with `--csv` a letter
-//! grid is printed; `--plot` draws `{stem}-stability`.
+//! grid and the count of cells upright for all impacts are printed; `--plot` draws
+//! `{stem}-stability`. A scene with a `[real_table]` runs each cell on the real table (SIL),
+//! so `--range planar.seed=1:20:20` counts the camera seeds that stay upright.
 
 use super::summary::{class_name, class_words, kappa_crit_of, summarize};
 use super::{config_of, PlanarSystem};
 use crate::model::planar::analysis::CellClass;
+use crate::model::planar::stats::RunStats;
 use crate::model::planar::{PlanarParams, RunEnd};
 use crate::output::Sig17;
 use crate::plot::{key_label, Chart};
 use crate::scene::SceneError;
 use crate::stream::Decimator;
-use crate::verbs::{Failure, SweepBase, SweepReport, Sweeps};
+use crate::verbs::{Failure, Setup, SweepBase, SweepReport, Sweeps};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -67,6 +70,8 @@ pub struct PlanarSweepReport {
     cells: Vec<(f64, Option<f64>, CellClass, f64)>,
     impacts: usize,
     kappa_crit: f64,
+    /// Cells that completed every impact upright.
+    upright: usize,
 }
 
 impl Sweeps for PlanarSystem {
@@ -96,13 +101,27 @@ impl Sweeps for PlanarSystem {
             crate::scene::apply_set(&mut table, &r.key, swept_value(&r.key, y))?;
         }
         let cfg = config_of(&base.config.name, table)?;
+        if let Some(t) = &cfg.real {
+            let out = super::closed::run_real(&cfg, t, None, &Setup::default(), &mut |_| {})?;
+            let s = out.summary;
+            return Ok(SweepCell {
+                class: s.class,
+                impacts: s.impacts,
+                end: s.end,
+                max_abs_theta_rad: s.max_abs_theta_rad,
+                late_mean_energy_jpkg: s.late_mean_energy_jpkg,
+            });
+        }
         let p = &cfg.params;
-        let run = cfg.model.run(cfg.start, p.impacts, p.seed);
-        let s = summarize(&cfg.name, p, &cfg.model, &run, p.impacts, 0.0);
+        let mut stats = RunStats::new(&cfg.model, p.impacts);
+        let done = cfg
+            .model
+            .run_streaming(cfg.start, p.impacts, p.seed, &mut |r| stats.push(r));
+        let s = summarize(&cfg.name, p, &cfg.model, &stats, &done, 0.0);
         Ok(SweepCell {
             class: s.class,
-            impacts: run.impacts.len(),
-            end: run.end,
+            impacts: done.impacts,
+            end: done.end,
             max_abs_theta_rad: s.max_abs_theta_rad,
             late_mean_energy_jpkg: s.late_mean_energy_jpkg,
         })
@@ -117,6 +136,7 @@ impl Sweeps for PlanarSystem {
             cells: Vec::new(),
             impacts: base.config.params.impacts,
             kappa_crit: kappa_crit_of(&base.config.model),
+            upright: 0,
         }
     }
 }
@@ -159,6 +179,7 @@ impl SweepReport<PlanarSystem> for PlanarSweepReport {
     }
 
     fn add(&mut self, x: f64, y: Option<f64>, c: SweepCell) {
+        self.upright += usize::from(c.end == RunEnd::Completed);
         self.cells
             .push((x, y, c.class, y.unwrap_or(c.max_abs_theta_rad)));
     }
@@ -195,6 +216,13 @@ impl SweepReport<PlanarSystem> for PlanarSweepReport {
             }
             grid.push('\n');
         }
+        let _ = writeln!(
+            grid,
+            "upright for all {} impacts: {} of {} cells",
+            self.impacts,
+            self.upright,
+            self.cells.len()
+        );
         Ok(grid)
     }
 

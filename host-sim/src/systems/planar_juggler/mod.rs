@@ -59,6 +59,7 @@ pub fn end_name(e: JuggleEnd) -> &'static str {
     match e {
         JuggleEnd::Completed => "completed",
         JuggleEnd::NoContact => "no_contact",
+        JuggleEnd::SearchCap => "search_cap",
         JuggleEnd::BadContact => "bad_contact",
         JuggleEnd::LeftHalfPlane => "left_half_plane",
         JuggleEnd::NonFinite => "non_finite",

@@ -206,4 +206,15 @@ impl Outcome for JugglerOutcome {
     fn json(&self) -> Result<String, String> {
         json_text(&self.summary, JsonStyle::Compact)
     }
+
+    /// A contact search at its cap, or a non-finite value, is not the juggler's physics.
+    fn shortfall(&self) -> Option<String> {
+        let s = &self.summary;
+        matches!(s.end, "search_cap" | "non_finite").then(|| {
+            format!(
+                "after {} of {} bats: {}",
+                s.impacts, s.impacts_requested, s.end
+            )
+        })
+    }
 }

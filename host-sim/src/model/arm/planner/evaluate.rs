@@ -5,6 +5,7 @@
 //! | --- | --- |
 //! | joint position (manipulator 1) | bounds on the control points (convex hull) |
 //! | joint velocity (2) | on the differences of control points (hull of the derivative) |
+//! | joint acceleration (the tracker's limit, not the paper's) | on the second differences (exact: the acceleration is piecewise linear) |
 //! | joint torque (3) | at every phase sample, arm + object reaction |
 //! | torque derivative (4) | between consecutive samples of one phase |
 //! | initial state (5) | by construction ([`super::layout`]) |
@@ -22,7 +23,7 @@ use super::super::geometry::V2;
 use super::super::motion::{ArmMotion, PlannedMotion};
 use super::super::ode::rk4_step;
 use super::super::task::Phase;
-use super::super::ArmSystem;
+use super::super::ArmScene;
 use super::layout::{Design, Layout};
 use serde::Serialize;
 
@@ -32,6 +33,8 @@ use serde::Serialize;
 pub enum Kind {
     /// Joint speed.
     Velocity,
+    /// Joint acceleration (what the tracker can follow).
+    Accel,
     /// Joint torque.
     Torque,
     /// Joint torque rate.
@@ -111,7 +114,7 @@ impl Sink {
 /// The program for one system.
 pub struct Problem<'a> {
     /// The system.
-    pub sys: &'a ArmSystem,
+    pub sys: &'a ArmScene,
     /// Its design-vector layout.
     pub layout: Layout,
     /// Extra grasp samples per phase, as fractions of the phase's duration in (0, 1):
@@ -125,7 +128,7 @@ type Torques = Vec<(f64, f64)>;
 
 impl<'a> Problem<'a> {
     /// The program of a system's task.
-    pub fn new(sys: &'a ArmSystem) -> Self {
+    pub fn new(sys: &'a ArmScene) -> Self {
         let layout = Layout::new(sys);
         Self {
             extra: vec![Vec::new(); layout.phases.len()],
@@ -154,6 +157,7 @@ impl<'a> Problem<'a> {
             mu_needed: 0.0,
         };
         self.knot_velocities(&d, &mut sink);
+        self.knot_accels(&d, &mut sink);
         let phases = self.layout.phases;
         let (mut t0, mut place, mut impact) = (0.0, self.sys.start, 0.0);
         let mut leaving: Option<(BodyState, Vec<(V2, V2)>)> = None;
@@ -212,6 +216,21 @@ impl<'a> Problem<'a> {
         for w in d.points_rad.windows(2) {
             let rate = (w[1] - w[0]) / d.segment_s;
             sink.within(Kind::Velocity, rate, -v, v, v);
+        }
+    }
+
+    /// Joint acceleration within what the tracker can follow: the spline's acceleration
+    /// is piecewise linear with the values `(P_i - 2 P_i+1 + P_i+2) / h^2` at the knots
+    /// (`crate::bspline`), so bounding these bounds it everywhere, exactly.
+    fn knot_accels(&self, d: &Design, sink: &mut Sink) {
+        let a = self.sys.planner.accel_max_radps2;
+        if !a.is_finite() {
+            return;
+        }
+        let h2 = d.segment_s * d.segment_s;
+        for w in d.points_rad.windows(3) {
+            let acc = (w[0] - 2.0 * w[1] + w[2]) / h2;
+            sink.within(Kind::Accel, acc, -a, a, a);
         }
     }
 

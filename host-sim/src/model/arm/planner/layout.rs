@@ -8,7 +8,7 @@
 //! (the convex hull holds the curve inside them).
 
 use super::super::task::{Phase, TaskKind};
-use super::super::ArmSystem;
+use super::super::ArmScene;
 
 /// How the spline ends.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,7 +55,7 @@ pub struct Design {
 
 impl Layout {
     /// The layout of a system's task.
-    pub fn new(sys: &ArmSystem) -> Self {
+    pub fn new(sys: &ArmScene) -> Self {
         let t = &sys.task;
         let b = &sys.bounds;
         let end = match (t.kind, t.final_angle_rad) {

@@ -12,7 +12,7 @@ pub mod solve;
 
 use super::motion::PlannedMotion;
 use super::task::Phase;
-use super::{ArmError, ArmSystem, Solver};
+use super::{ArmError, ArmScene, Solver};
 use evaluate::{Kind, PlanSample, Problem};
 use serde::Serialize;
 use std::time::Instant;
@@ -20,7 +20,7 @@ use std::time::Instant;
 /// Largest scaled constraint value a plan may keep and still count as feasible (a
 /// ten-thousandth of each constraint's scale: of g for forces, of the limit for torques
 /// and speeds, of a tenth of the tolerance for the goal). Friction rows are not left
-/// violated: mu is raised to what the samples need ([`repair_mu`]).
+/// violated: mu is raised to what the samples need (`repair_mu`).
 pub const FEASIBILITY_TOL: f64 = 1e-4;
 
 /// SQP stops a hair outside the friction cone; mu is a free variable, so raise it to
@@ -114,7 +114,7 @@ fn worst(e: &evaluate::Eval) -> (f64, Option<Kind>) {
 
 /// One start: solve, then refine the samples and solve again (at most
 /// [`refine::ROUNDS`] times). Returns the problem with its extra samples and the result.
-fn solve_start<'a>(sys: &'a ArmSystem, x0: Vec<f64>) -> (Problem<'a>, solve::Solved) {
+fn solve_start<'a>(sys: &'a ArmScene, x0: Vec<f64>) -> (Problem<'a>, solve::Solved) {
     let mut problem = Problem::new(sys);
     let bounds = problem.layout.bounds();
     let (mut x, mut it, mut ev) = (x0, 0, 0);
@@ -142,7 +142,7 @@ fn solve_start<'a>(sys: &'a ArmSystem, x0: Vec<f64>) -> (Problem<'a>, solve::Sol
 }
 
 /// Plan the system's task. `Err(NoPlan)` names the constraint that no start satisfied.
-pub fn plan(sys: &ArmSystem) -> Result<Plan, ArmError> {
+pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
     let clock = Instant::now();
     let seeding = Problem::new(sys);
     // shot seeds first, then the plain guesses: SQP's local optima differ by start

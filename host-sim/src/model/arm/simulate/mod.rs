@@ -18,11 +18,11 @@
 
 pub mod step;
 
-use super::contact::{BodyState, Placement};
+use super::contact::{BodyState, Joint, Placement};
 use super::geometry::V2;
 use super::motion::ArmMotion;
 use super::task::Phase;
-use super::ArmSystem;
+use super::ArmScene;
 use serde::Serialize;
 
 /// Integration step of the verifier, s.
@@ -147,26 +147,59 @@ enum State {
     },
 }
 
+/// Interval of [`Sample`]s handed to an observer ([`execute_observed`]), s: one per
+/// millisecond of simulated time (the control period of the shipped scenes), plus one at
+/// every event.
+pub const SAMPLE_S: f64 = 1e-3;
+
+/// The run at one instant, as an observer ([`execute_observed`]) sees it: a row of the
+/// `--trace`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Time, s.
+    pub t_s: f64,
+    /// `sample` (a regular sample), or the event at this instant ([`Event::kind`]).
+    pub kind: &'static str,
+    /// The object's phase at this instant (after the event, if any).
+    pub phase: Phase,
+    /// The joint.
+    pub joint: Joint,
+    /// The object in the world.
+    pub body: BodyState,
+    /// Friction the contact needs, |f_t| / f_n (NaN in flight).
+    pub friction_ratio: f64,
+}
+
 /// Run `motion` against the object with friction coefficient `mu` (0.1 ms steps,
 /// frames and friction recorded).
-pub fn execute(sys: &ArmSystem, motion: &dyn ArmMotion, mu: f64) -> Execution {
+pub fn execute(sys: &ArmScene, motion: &dyn ArmMotion, mu: f64) -> Execution {
     execute_with(sys, motion, mu, SimOptions::default())
 }
 
 /// [`execute`] with a chosen step and recording.
-pub fn execute_with(
-    sys: &ArmSystem,
-    motion: &dyn ArmMotion,
-    mu: f64,
-    opt: SimOptions,
-) -> Execution {
+pub fn execute_with(sys: &ArmScene, motion: &dyn ArmMotion, mu: f64, opt: SimOptions) -> Execution {
     let mut run = Runner::new(sys, motion, mu, opt);
     run.go();
     run.finish()
 }
 
+/// [`execute_with`], handing `observe` a [`Sample`] every [`SAMPLE_S`] and one at every
+/// event, as the run goes (the `--trace` streams them).
+pub fn execute_observed(
+    sys: &ArmScene,
+    motion: &dyn ArmMotion,
+    mu: f64,
+    opt: SimOptions,
+    observe: &mut dyn FnMut(&Sample),
+) -> Execution {
+    let mut run = Runner::new(sys, motion, mu, opt);
+    run.observe = Some(observe);
+    run.go();
+    run.finish()
+}
+
 struct Runner<'a> {
-    sys: &'a ArmSystem,
+    sys: &'a ArmScene,
     arm: &'a dyn ArmMotion,
     mu: f64,
     state: State,
@@ -178,10 +211,12 @@ struct Runner<'a> {
     breaks: Vec<f64>,
     table_y: f64,
     opt: SimOptions,
+    observe: Option<&'a mut dyn FnMut(&Sample)>,
+    next_sample: f64,
 }
 
 impl<'a> Runner<'a> {
-    fn new(sys: &'a ArmSystem, arm: &'a dyn ArmMotion, mu: f64, opt: SimOptions) -> Self {
+    fn new(sys: &'a ArmScene, arm: &'a dyn ArmMotion, mu: f64, opt: SimOptions) -> Self {
         let mut breaks = arm.breaks_s();
         breaks.sort_by(f64::total_cmp);
         let s0 = sys.rig.grasped_state(&sys.start, &arm.joint(0.0));
@@ -216,6 +251,8 @@ impl<'a> Runner<'a> {
             breaks,
             table_y,
             opt,
+            observe: None,
+            next_sample: 0.0,
         }
     }
 
@@ -230,6 +267,7 @@ impl<'a> Runner<'a> {
 
     fn event(&mut self, t: f64, kind: &'static str) {
         self.out.events.push(Event { t_s: t, kind });
+        self.observe_now(kind);
     }
 
     fn fail(&mut self, how: Executed, why: String) {

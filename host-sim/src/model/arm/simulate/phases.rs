@@ -1,7 +1,10 @@
 //! The runner's step for each contact state, and the records it keeps.
 
 use super::step::{self, GraspEvent, RollEvent};
-use super::{Executed, Frame, FrictionSample, GoalError, Runner, State, FRAME_S, FRICTION_S};
+use super::{
+    Executed, Frame, FrictionSample, GoalError, Runner, Sample, State, FRAME_S, FRICTION_S,
+    SAMPLE_S,
+};
 use crate::model::arm::contact::{BodyState, Pivot, Placement};
 use crate::model::arm::geometry::wrap_pi;
 use crate::model::arm::task::Phase;
@@ -214,7 +217,29 @@ impl Runner<'_> {
         }
     }
 
+    /// Hand the observer, if any, the run at this instant.
+    pub(super) fn observe_now(&mut self, kind: &'static str) {
+        if self.observe.is_none() {
+            return;
+        }
+        let sample = Sample {
+            t_s: self.t,
+            kind,
+            phase: self.phase(),
+            joint: self.arm.joint(self.t),
+            body: self.body(),
+            friction_ratio: self.ratio().unwrap_or(f64::NAN),
+        };
+        if let Some(f) = self.observe.as_mut() {
+            f(&sample);
+        }
+    }
+
     pub(super) fn record(&mut self) {
+        if self.t >= self.next_sample {
+            self.observe_now("sample");
+            self.next_sample = ((self.t / SAMPLE_S).floor() + 1.0) * SAMPLE_S;
+        }
         let ratio = self.ratio();
         let mut new_peak = false;
         if let Some(r) = ratio.filter(|r| r.is_finite()) {
