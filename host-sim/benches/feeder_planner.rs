@@ -83,16 +83,7 @@ fn bench(c: &mut Criterion) {
         let f = cell(&v);
         match plan(&f, arrival, &opts) {
             Ok(p) => {
-                let kinds: Vec<String> = p
-                    .steps
-                    .iter()
-                    .map(|s| {
-                        serde_json::to_value(s)
-                            .ok()
-                            .and_then(|j| j["primitive"].as_str().map(String::from))
-                            .unwrap_or_default()
-                    })
-                    .collect();
+                let kinds: Vec<&str> = p.steps.iter().map(|s| s.name()).collect();
                 println!(
                     "{name}: hull {} stable {} steps [{}] plan duration {:.1} s",
                     f.part.hull.len(),

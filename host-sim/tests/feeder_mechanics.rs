@@ -43,7 +43,8 @@ fn flush(part: &Part, r: f64, angle: f64) -> Pose {
 #[test]
 fn drift_alone_moves_with_the_belt_in_minus_y() {
     // No contact: V = V_belt = (0, -v_b, 0). After 2 s the part is 2 v_b lower, same x
-    // and angle.
+    // and angle. (Mutation checked: reversing the belt in `Medium`'s velocity, the
+    // mechanics' only belt direction, fails this test and 21 other feeder tests.)
     let p = square();
     let start = Pose {
         com_m: Vec2::new(0.2, 0.5),

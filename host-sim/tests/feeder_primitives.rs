@@ -20,8 +20,8 @@ fn pts(v: &[(f64, f64)]) -> Vec<Vec2> {
 /// A scene around `vertices` (m); the shapes below are the ones to ship.
 fn scene(vertices: &str, extra: &str) -> String {
     format!(
-        "[part]\nvertices_m = {vertices}\n[belt]\nspeed_mps = 0.05\nwidth_m = 1.0\n\
-         [fence]\nlength_m = 0.5\nmu = 0.3\n[arrival]\nx_m = 0.2\ny_m = 0.1\nangle_deg = 30.0\n{extra}"
+        "[feeder.part]\nvertices_m = {vertices}\n[feeder.belt]\nspeed_mps = 0.05\nwidth_m = 1.0\n\
+         [feeder.fence]\nlength_m = 0.5\nmu = 0.3\n[feeder.arrival]\nx_m = 0.2\ny_m = 0.1\nangle_deg = 30.0\n{extra}"
     )
 }
 
@@ -246,7 +246,9 @@ fn parallel_parts_cannot_be_fed_without_the_convergent_turn() {
 
 #[test]
 fn infeasibility_names_the_fence_or_the_belt() {
-    let short = scene(SQUARE, "").replace("length_m = 0.5", "length_m = 0.12");
+    let short = scene(SQUARE, "")
+        .replace("length_m = 0.5", "length_m = 0.12")
+        .replace("x_m = 0.2", "x_m = 0.06");
     let b = FeederScene::from_toml_str(&short).unwrap().build().unwrap();
     let a = Pose {
         com_m: Vec2::new(0.06, 0.1),
@@ -255,7 +257,8 @@ fn infeasibility_names_the_fence_or_the_belt() {
     let e = plan(&b.feeder, a, &b.options).unwrap_err();
     assert!(matches!(e, FeederError::Infeasible(_)));
     assert!(
-        e.to_string().contains("fence too short") && e.to_string().contains("fence.length_m"),
+        e.to_string().contains("fence too short")
+            && e.to_string().contains("feeder.fence.length_m"),
         "{e}"
     );
     let narrow = scene(SQUARE, "").replace("width_m = 1.0", "width_m = 0.3");
@@ -274,7 +277,7 @@ fn infeasibility_names_the_fence_or_the_belt() {
     )
     .unwrap_err();
     assert!(
-        e.to_string().contains("belt too narrow") && e.to_string().contains("belt.width_m"),
+        e.to_string().contains("belt too narrow") && e.to_string().contains("feeder.belt.width_m"),
         "{e}"
     );
 }
@@ -284,37 +287,40 @@ fn scene_errors_name_the_dotted_key() {
     let cases = [
         (
             scene(SQUARE, "").replace("speed_mps = 0.05", "speed_mps = -0.05"),
-            "belt.speed_mps",
+            "feeder.belt.speed_mps",
         ),
         (
             scene(SQUARE, "").replace("mu = 0.3", "mu = -1.0"),
-            "fence.mu",
+            "feeder.fence.mu",
         ),
         (
             scene(SQUARE, "").replace("length_m = 0.5", "length_m = 0.5\nlenght = 2"),
-            "fence",
+            "feeder.fence.lenght",
         ),
         (
-            scene(SQUARE, "[goal]\ncontact_radius_m = -0.1\n"),
-            "goal.contact_radius_m",
+            scene(SQUARE, "[feeder.goal]\ncontact_radius_m = -0.1\n"),
+            "feeder.goal.contact_radius_m",
         ),
         (
-            scene(SQUARE, "[noise]\nbelt_speed_rel = -0.1\n"),
-            "noise.belt_speed_rel",
+            scene(SQUARE, "[feeder.noise]\nbelt_speed_rel = -0.1\n"),
+            "feeder.noise.belt_speed_rel",
         ),
         (
             scene(SQUARE, "").replace("y_m = 0.1", "y_m = 0.01"),
-            "arrival.y_m",
+            "feeder.arrival.y_m",
         ),
         (
             scene(SQUARE, "").replace("x_m = 0.2", "x_m = 0.49"),
-            "arrival.x_m",
+            "feeder.arrival.x_m",
         ),
-        (scene("[[0.0, 0.0], [0.04, 0.0]]", ""), "part.vertices_m"),
-        (scene(SQUARE, "[part2]\n"), "part2"),
+        (
+            scene("[[0.0, 0.0], [0.04, 0.0]]", ""),
+            "feeder.part.vertices_m",
+        ),
+        (scene(SQUARE, "[feeder.part2]\n"), "feeder.part2"),
         (
             scene(SQUARE, "").replace("mu = 0.3", "mu = 0.3\nmax_angle_deg = 95.0"),
-            "fence.max_angle_deg",
+            "feeder.fence.max_angle_deg",
         ),
     ];
     for (text, key) in cases {
@@ -323,12 +329,18 @@ fn scene_errors_name_the_dotted_key() {
             .unwrap_err();
         assert!(e.to_string().contains(key), "{key}: {e}");
     }
-    let com = scene(SQUARE, "").replace("[belt]", "center_of_mass_m = [0.05, 0.02]\n[belt]");
+    let com = scene(SQUARE, "").replace(
+        "[feeder.belt]",
+        "center_of_mass_m = [0.05, 0.02]\n[feeder.belt]",
+    );
     let e = FeederScene::from_toml_str(&com)
         .unwrap()
         .build()
         .unwrap_err();
-    assert!(e.to_string().contains("part.center_of_mass_m"), "{e}");
+    assert!(
+        e.to_string().contains("feeder.part.center_of_mass_m"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -4,6 +4,7 @@
 //! | system | scene table | what |
 //! | --- | --- | --- |
 //! | [`arm`] | `[arm]` or `[task]` | Akella, Huang, Lynch & Mason's one-joint arm: snatch, throw, roll, rolling throw, planned and tracked |
+//! | [`feeder`] | `[feeder]` | Akella, Huang, Lynch & Mason's 1JOC parts feeder: plan, simulated feed, fraction fed |
 //! | [`hopper::sampled`] | `[hopper]` with `[hopper.control]` | the hopper's thrust valve switched by the core's fixed-rate controller (SIL, `--hil`) |
 //! | [`hopper`] | `[hopper]` | Koditschek & Bühler's vertical hopper: return maps, period doubling |
 //! | [`planar_juggler`] | `[planar_juggler]` | Rizzi & Koditschek's planar juggler, mirror law eq. 12 or the modified law eq. 15 |
@@ -13,6 +14,7 @@
 //! How to add one: `docs/adding-a-system.md`.
 
 pub mod arm;
+pub mod feeder;
 pub mod hopper;
 pub mod line;
 pub mod planar;
@@ -229,9 +231,10 @@ impl<S: System> Dispatch for S {
 
 /// Every system, in the order they are asked to claim a scene: the line system last (it
 /// claims every scene, so it runs those no other system claims).
-pub static SYSTEMS: [&dyn Dispatch; 6] = [
+pub static SYSTEMS: [&dyn Dispatch; 7] = [
     &arm::ArmSystem,
     &hopper::sampled::SampledHopperSystem,
+    &feeder::FeederSystem,
     &hopper::HopperSystem,
     &planar_juggler::PlanarJugglerSystem,
     &planar::PlanarSystem,

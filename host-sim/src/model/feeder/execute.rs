@@ -5,6 +5,7 @@ use super::geometry::{Pose, Vec2};
 use super::planner::goal::goal_edge;
 use super::planner::{plan, Feeder, Plan, PlanOptions};
 use super::primitives::Primitive;
+use super::quasistatic::{Fence, Mode};
 use super::sim::{flush_edge, run, Failure};
 use super::FeederError;
 use rand::rngs::StdRng;
@@ -76,6 +77,8 @@ pub struct Execution {
     pub failure: Option<Failure>,
     /// The values the run used.
     pub actual: Actual,
+    /// Simulation steps taken.
+    pub steps: usize,
     /// Pictures at every fence-schedule knot.
     pub frames: Vec<Frame>,
 }
@@ -113,29 +116,69 @@ pub fn perturb(f: &Feeder, arrival: Pose, noise: Option<&Noise>) -> Actual {
     }
 }
 
+/// One simulation step of an execution (what `--trace` streams).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepRecord {
+    /// Time after the step, s.
+    pub t_s: f64,
+    /// Index into the plan's steps of the primitive running at `t_s`.
+    pub step: usize,
+    /// The fence at `t_s` (its angle, and the rate of the schedule segment).
+    pub fence: Fence,
+    /// The part's pose after the step.
+    pub pose: Pose,
+    /// The contact mode that held during the step.
+    pub mode: Mode,
+}
+
 /// Simulates `plan` for a part arriving at `arrival`, with optional `noise`.
 pub fn execute(f: &Feeder, plan: &Plan, arrival: Pose, noise: Option<&Noise>) -> Execution {
-    let actual = perturb(f, arrival, noise);
-    let mut setup = f.setup;
-    setup.medium.belt_speed_mps = actual.belt_speed_mps;
-    setup.medium.fence_mu = actual.fence_mu;
-    let sched = &plan.schedule;
-    let starts: Vec<f64> = plan
-        .steps
+    execute_observed(f, plan, arrival, noise, &mut |_| {})
+}
+
+/// Start time of each of the plan's steps, s.
+fn step_starts(plan: &Plan) -> Vec<f64> {
+    plan.steps
         .iter()
         .scan(0.0, |t, s| {
             let t0 = *t;
             *t += s.duration_s();
             Some(t0)
         })
-        .collect();
+        .collect()
+}
+
+/// [`execute`], handing every simulation step to `observe` as it happens.
+pub fn execute_observed(
+    f: &Feeder,
+    plan: &Plan,
+    arrival: Pose,
+    noise: Option<&Noise>,
+    observe: &mut dyn FnMut(&StepRecord),
+) -> Execution {
+    let actual = perturb(f, arrival, noise);
+    let mut setup = f.setup;
+    setup.medium.belt_speed_mps = actual.belt_speed_mps;
+    setup.medium.fence_mu = actual.fence_mu;
+    let sched = &plan.schedule;
+    let starts = step_starts(plan);
+    let step_at = |t: f64| starts.iter().rposition(|&s| s <= t + 1e-9).unwrap_or(0);
     let mut frames = Vec::with_capacity(sched.knots.len());
     let (mut t, mut pose) = (0.0, actual.arrival);
-    let mut failure = None;
+    let (mut failure, mut steps) = (None, 0);
     for &(tk, _) in &sched.knots {
         if tk > t {
-            let out = run(&f.part, &setup, sched, pose, t, tk, |_, _, _| {});
+            let out = run(&f.part, &setup, sched, pose, t, tk, |ts, p, m| {
+                observe(&StepRecord {
+                    t_s: ts,
+                    step: step_at(ts),
+                    fence: sched.at(ts),
+                    pose: *p,
+                    mode: m.mode,
+                })
+            });
             (t, pose, failure) = (out.t_s, out.pose, out.failure);
+            steps += out.steps;
         }
         frames.push(frame(f, plan, &starts, t, pose));
         if failure.is_some() {
@@ -159,6 +202,7 @@ pub fn execute(f: &Feeder, plan: &Plan, arrival: Pose, noise: Option<&Noise>) ->
         radius_error_m: err,
         failure,
         actual,
+        steps,
         frames,
     }
 }
@@ -193,9 +237,11 @@ pub struct Summary {
     pub goal_edge: usize,
     /// The primitives with their parameters.
     pub plan: Vec<Primitive>,
-    /// Wall-clock time the planner took, s.
+    /// The plan's time: how long the planned feed takes from the arrival pose, s (the
+    /// quantity the planner minimizes, sec. 3.3).
     pub plan_time_s: f64,
-    /// Whether the simulated execution reached the goal.
+    /// Whether the simulated execution reached the goal edge within [`FEED_TOL_M`] of the
+    /// goal radius.
     pub reached_goal: bool,
     /// Edge flush on the fence at the end.
     pub final_edge: Option<usize>,
@@ -205,17 +251,26 @@ pub struct Summary {
     pub radius_error_m: f64,
     /// Goal contact radius, m.
     pub goal_radius_m: f64,
+    /// The contact radius the plan predicts (its own simulation, nominal values), m.
+    pub planned_radius_m: f64,
     /// Edge the part settled on at arrival.
     pub start_edge: usize,
-    /// Planned feed duration, s.
-    pub plan_duration_s: f64,
+    /// The part's stable hull edges.
+    pub stable_edges: Vec<usize>,
+    /// Convergent turns in the plan.
+    pub convergent_turns: usize,
     /// Failure of the execution, if any.
     pub failure: Option<Failure>,
     /// Values the execution used (noise applied).
     pub actual: Actual,
+    /// Simulation steps of the execution.
+    pub sim_steps: usize,
+    /// The planner's wall-clock time, s.
+    pub wall_time_s: f64,
     /// Fence and belt for the filmstrip.
     pub stage: Stage,
-    /// The filmstrip: part and fence at every schedule knot.
+    /// The filmstrip's frames: part and fence at every schedule knot (not in the JSON).
+    #[serde(skip)]
     pub frames: Vec<Frame>,
 }
 
@@ -226,22 +281,47 @@ pub fn plan_and_execute(
     opts: &PlanOptions,
     noise: Option<&Noise>,
 ) -> Result<Summary, FeederError> {
+    plan_and_execute_observed(f, arrival, opts, noise, &mut |_| {})
+}
+
+/// [`plan_and_execute`], handing every simulation step of the execution to `observe`.
+pub fn plan_and_execute_observed(
+    f: &Feeder,
+    arrival: Pose,
+    opts: &PlanOptions,
+    noise: Option<&Noise>,
+    observe: &mut dyn FnMut(&StepRecord),
+) -> Result<Summary, FeederError> {
     let t0 = std::time::Instant::now();
     let p = plan(f, arrival, opts)?;
-    let plan_time_s = t0.elapsed().as_secs_f64();
-    let ex = execute(f, &p, arrival, noise);
-    Ok(Summary {
+    let wall_time_s = t0.elapsed().as_secs_f64();
+    let ex = execute_observed(f, &p, arrival, noise, observe);
+    Ok(summarize(f, p, ex, wall_time_s))
+}
+
+/// The summary of `plan`, planned in `wall_time_s`, and its execution `ex`.
+pub fn summarize(f: &Feeder, p: Plan, ex: Execution, wall_time_s: f64) -> Summary {
+    let convergent_turns = p
+        .steps
+        .iter()
+        .filter(|s| matches!(s, Primitive::ConvergentTurn { .. }))
+        .count();
+    Summary {
         goal_edge: p.goal_edge,
-        plan_time_s,
+        plan_time_s: p.duration_s,
         reached_goal: ex.reached_goal,
         final_edge: ex.final_edge,
         final_contact_radius_m: ex.final_contact_radius_m,
         radius_error_m: ex.radius_error_m,
         goal_radius_m: p.goal_radius_m,
+        planned_radius_m: p.predicted_radius_m,
         start_edge: p.start_edge,
-        plan_duration_s: p.duration_s,
+        stable_edges: f.part.stable_edges(),
+        convergent_turns,
         failure: ex.failure,
         actual: ex.actual,
+        sim_steps: ex.steps,
+        wall_time_s,
         stage: Stage {
             fence_length_m: f.setup.fence_length_m,
             belt_edge_m: f.setup.belt_edge_m,
@@ -249,7 +329,7 @@ pub fn plan_and_execute(
         },
         frames: ex.frames,
         plan: p.steps,
-    })
+    }
 }
 
 /// Random arrival poses of a sweep.

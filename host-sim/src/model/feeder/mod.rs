@@ -13,6 +13,7 @@
 //! | [`sim`] | time-stepping the part under a fence schedule; failures (off the belt or fence) |
 //! | [`stability`] | stable-push condition and the minimum contact radius |
 //! | [`primitives`] | stable push, turn, jog, convergent turn as fence schedules |
+//! | [`pushes`] | rate-scheduled stable pushes: the window of stable fence rates, profiles |
 //! | [`planner`] | goal edge, edge sequences, parameter optimization (COBYLA) |
 //! | [`scene`] | the scene's tables (serde) and their validation |
 //! | [`execute`] | simulated execution with noise, the JSON summary, the arrival sweep |
@@ -27,6 +28,7 @@ pub mod geometry;
 pub mod part;
 pub mod planner;
 pub mod primitives;
+pub mod pushes;
 pub mod quasistatic;
 pub mod scene;
 pub mod sim;
@@ -44,7 +46,7 @@ pub enum FeederError {
     /// A scene value is invalid: `key` is the dotted scene key, `requirement` what it
     /// must satisfy.
     Param {
-        /// Dotted scene key, e.g. `belt.speed_mps`.
+        /// Dotted scene key, e.g. `feeder.belt.speed_mps`.
         key: String,
         /// What it must satisfy, in words.
         requirement: String,

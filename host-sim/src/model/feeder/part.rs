@@ -60,17 +60,17 @@ pub const STABLE_MARGIN: f64 = 0.02;
 impl Part {
     /// Builds a part from its vertices (either orientation, simple polygon, >= 3 points)
     /// and center of mass (default: the area centroid), both in any common frame, m.
-    /// Errors name the scene keys `part.vertices_m` and `part.center_of_mass_m`.
+    /// Errors name the scene keys `feeder.part.vertices_m` and `feeder.part.center_of_mass_m`.
     pub fn new(vertices: &[Vec2], com: Option<Vec2>) -> Result<Part, FeederError> {
         let bad = |key: &str, why: &str| Err(FeederError::param(key, why));
         if vertices.len() < 3 {
-            return bad("part.vertices_m", "needs at least 3 vertices");
+            return bad("feeder.part.vertices_m", "needs at least 3 vertices");
         }
         if vertices
             .iter()
             .any(|v| !v.x.is_finite() || !v.y.is_finite())
         {
-            return bad("part.vertices_m", "must be finite numbers");
+            return bad("feeder.part.vertices_m", "must be finite numbers");
         }
         let mut v = vertices.to_vec();
         if signed_area(&v) < 0.0 {
@@ -83,13 +83,16 @@ impl Part {
             .fold(0.0, f64::max);
         if area.is_nan() || area <= 1e-6 * diam * diam || !is_simple(&v) {
             return bad(
-                "part.vertices_m",
+                "feeder.part.vertices_m",
                 "must form a simple polygon with non-zero area",
             );
         }
         let com = com.unwrap_or_else(|| centroid(&v));
         if !com.x.is_finite() || !com.y.is_finite() || !contains(&v, com) {
-            return bad("part.center_of_mass_m", "must lie inside the polygon");
+            return bad(
+                "feeder.part.center_of_mass_m",
+                "must lie inside the polygon",
+            );
         }
         let body: Vec<Vec2> = v.iter().map(|&p| p - com).collect();
         Ok(Self::from_body(body, area))
@@ -194,10 +197,13 @@ mod tests {
     #[test]
     fn bad_input_names_the_key() {
         let e = Part::new(&v(&[(0.0, 0.0), (1.0, 0.0)]), None).unwrap_err();
-        assert!(e.to_string().contains("part.vertices_m"), "{e}");
+        assert!(e.to_string().contains("feeder.part.vertices_m"), "{e}");
         let sq = v(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]);
         let e = Part::new(&sq, Some(Vec2::new(2.0, 0.5))).unwrap_err();
-        assert!(e.to_string().contains("part.center_of_mass_m"), "{e}");
+        assert!(
+            e.to_string().contains("feeder.part.center_of_mass_m"),
+            "{e}"
+        );
         let bow = v(&[(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)]);
         assert!(Part::new(&bow, None).is_err());
     }

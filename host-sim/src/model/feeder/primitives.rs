@@ -4,13 +4,15 @@
 //! The extracted paper lost fig. 7; what follows is our realization, consistent with the
 //! text of sec. 3.1-3.3 and derived with the mechanics of [`super::quasistatic`].
 //!
-//! - **Stable push**: the fence turns at the push rate omega_p with an edge flush; the
-//!   part moves rigidly with it (contact radius unchanged) while the radius is above the
-//!   minimum of [`super::stability`].
+//! - **Stable push**: the fence turns with an edge flush; the part moves rigidly with it
+//!   (contact radius unchanged). The rate is chosen angle by angle inside the window of
+//!   stable rates, at most the push rate omega_p ([`super::pushes`]): the radius must be
+//!   above the free-rate minimum there.
 //! - **Turn** (from stable edge e to stable edge e', counter-clockwise rotation Psi of the
 //!   part, 0 < Psi < 180 deg): stable push 0 -> theta+; the fence drops away at its top
-//!   rate; the part drifts in -y; the fence, rising again at omega_p, meets it exactly
-//!   when edge e' (now at angle theta+ - Psi) lies on the fence line, so
+//!   rate; the part drifts in -y; the fence, rising again (at the new edge's push rate at
+//!   theta-), meets it exactly when edge e' (now at angle theta+ - Psi) lies on the fence
+//!   line, so
 //!   **theta- = theta+ - Psi** and e' lands flush ("caught at theta-"); stable push
 //!   theta- -> 0. A single turn can rotate the part by less than 180 deg only, since
 //!   theta+ < 90 deg and theta- > -90 deg: that is why the paper needs another primitive
@@ -40,6 +42,7 @@
 //!   side, stays on the edge ([`can_jog`]).
 
 use super::part::{HullEdge, Part};
+use super::pushes::{extend, profile_time_s, Profile};
 use super::sim::Schedule;
 use super::stability::PUSH_MARGIN;
 use serde::Serialize;
@@ -134,6 +137,15 @@ pub enum Primitive {
 }
 
 impl Primitive {
+    /// The primitive's name as serialized (`catch`, `jog`, `turn`, `convergent_turn`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Primitive::Catch { .. } => "catch",
+            Primitive::Jog { .. } => "jog",
+            Primitive::Turn { .. } => "turn",
+            Primitive::ConvergentTurn { .. } => "convergent_turn",
+        }
+    }
     /// Duration, s.
     pub fn duration_s(&self) -> f64 {
         match self {
@@ -162,6 +174,31 @@ pub fn turn_landing_radius_m(
     r_m * psi.cos() - from.h_m * psi.sin() - d * theta_minus.sin()
 }
 
+/// The pushes of a turn: the profile up from 0 to theta+ (on the old edge, at the radius
+/// before the turn), the fence's rate as it meets the part at theta- (`catch_rate`), and the
+/// profile back from theta- to 0 (on the new edge, at the landing radius); see
+/// [`super::pushes`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct TurnPushes {
+    /// `(angle, rate)` segments from 0 to theta+.
+    pub up: Profile,
+    /// Fence rate at the catch, rad/s (> 0).
+    pub catch_rate: f64,
+    /// `(angle, rate)` segments from theta- to 0.
+    pub back: Profile,
+}
+
+impl TurnPushes {
+    /// Every push at the fixed rate `omega`.
+    pub fn fixed(omega: f64, theta_plus: f64) -> Self {
+        Self {
+            up: vec![(theta_plus, omega)],
+            catch_rate: omega,
+            back: vec![(0.0, omega)],
+        }
+    }
+}
+
 /// Fence schedule of a (convergent) turn from `t0` starting at fence angle 0, for drift
 /// distance `drift_m`; `None` when the fence cannot drop away and rise again within the
 /// drift time. Returns the schedule and the catch time.
@@ -169,47 +206,58 @@ pub fn turn_schedule(
     t0: f64,
     drive: &Drive,
     v_b: f64,
-    theta_plus: f64,
     theta_minus: f64,
     drift_m: f64,
+    pushes: &TurnPushes,
 ) -> Option<(Schedule, f64)> {
     let mut s = Schedule::starting(t0, 0.0);
-    s.move_to(theta_plus, drive.push_rate_radps);
-    let t_release = s.end_s();
-    let t_catch = t_release + drift_m / v_b;
-    let run_up = CATCH_RUN_UP_RAD
-        .min(theta_minus + drive.max_angle_rad)
-        .max(0.0);
-    let low = theta_minus - run_up;
-    s.move_to(low, drive.max_rate_radps);
-    let rise_start = t_catch - run_up / drive.push_rate_radps;
-    if s.end_s() > rise_start + 1e-12 {
-        return None;
-    }
-    s.hold(rise_start - s.end_s());
-    s.move_to(theta_minus, drive.push_rate_radps);
-    s.move_to(0.0, drive.push_rate_radps);
+    extend(&mut s, &pushes.up);
+    let t_catch = drop_and_catch(&mut s, drive, v_b, theta_minus, drift_m, pushes.catch_rate)?;
+    extend(&mut s, &pushes.back);
     s.hold(SETTLE_S);
     Some((s, t_catch))
 }
 
-/// Least drift time, s, for the fence to drop from theta+ and rise again to theta-.
-pub fn turn_min_drift_s(drive: &Drive, theta_plus: f64, theta_minus: f64) -> f64 {
-    let run_up = CATCH_RUN_UP_RAD
+/// From the release (the end of `s`, at theta+): the fence drops at its top rate to just
+/// below theta-, waits, and rises at `catch_rate` to meet the part at theta- after it has
+/// drifted `drift_m`. Returns the catch time; `None` when there is no time for that.
+pub fn drop_and_catch(
+    s: &mut Schedule,
+    drive: &Drive,
+    v_b: f64,
+    theta_minus: f64,
+    drift_m: f64,
+    catch_rate: f64,
+) -> Option<f64> {
+    let t_catch = s.end_s() + drift_m / v_b;
+    let run_up = catch_run_up(drive, theta_minus);
+    s.move_to(theta_minus - run_up, drive.max_rate_radps);
+    let rise_start = t_catch - run_up / catch_rate;
+    if s.end_s() > rise_start + 1e-12 {
+        return None;
+    }
+    s.hold(rise_start - s.end_s());
+    s.move_to(theta_minus, catch_rate);
+    Some(t_catch)
+}
+
+/// Fence angle run-up before a catch at `theta_minus`, rad.
+fn catch_run_up(drive: &Drive, theta_minus: f64) -> f64 {
+    CATCH_RUN_UP_RAD
         .min(theta_minus + drive.max_angle_rad)
-        .max(0.0);
-    (theta_plus - theta_minus + run_up) / drive.max_rate_radps + run_up / drive.push_rate_radps
+        .max(0.0)
+}
+
+/// Least drift time, s, for the fence to drop from theta+ and rise again to theta- at
+/// `catch_rate`.
+pub fn turn_min_drift_s(drive: &Drive, theta_plus: f64, theta_minus: f64, catch_rate: f64) -> f64 {
+    let run_up = catch_run_up(drive, theta_minus);
+    (theta_plus - theta_minus + run_up) / drive.max_rate_radps + run_up / catch_rate
 }
 
 /// Duration of a turn, s: push up, drift, push back.
-pub fn turn_duration_s(
-    drive: &Drive,
-    v_b: f64,
-    theta_plus: f64,
-    theta_minus: f64,
-    drift_m: f64,
-) -> f64 {
-    (theta_plus + theta_minus.abs()) / drive.push_rate_radps + drift_m / v_b
+pub fn turn_duration_s(v_b: f64, theta_minus: f64, drift_m: f64, pushes: &TurnPushes) -> f64 {
+    profile_time_s(0.0, &pushes.up) + drift_m / v_b + profile_time_s(theta_minus, &pushes.back)
 }
 
 /// Slide speed along a fence held at `tilt_rad` (|tilt| > atan mu), m/s.

@@ -1,41 +1,41 @@
-//! The feeder scene's tables (serde, unknown keys rejected) and their validation into a
-//! [`Feeder`], an arrival pose, planner options and noise. Errors name the dotted key.
+//! The feeder scene: one top-level `[feeder]` table (the table that selects the feeder
+//! system, `docs/feeder.md`) with sub-tables, deserialized with unknown keys rejected and
+//! validated into a [`Feeder`], an arrival pose, planner options and noise. Every error
+//! names the dotted key (`feeder.belt.speed_mps`).
 //!
 //! ```toml
-//! [part]
+//! [feeder.part]
 //! vertices_m = [[0.0, 0.0], [0.04, 0.0], [0.04, 0.04], [0.0, 0.04]]  # simple polygon, m
 //! center_of_mass_m = [0.02, 0.02]   # optional (area centroid); must lie inside
-//! [belt]
+//! [feeder.belt]
 //! speed_mps = 0.05                  # v_b > 0, the belt moves in -y
 //! width_m = 0.8                     # pivot on the center line; the right half is used
-//! [fence]
+//! [feeder.fence]
 //! length_m = 0.4
 //! mu = 0.3                          # part-fence Coulomb friction
 //! push_rate_radps = 2.0             # stable pushes and catches
 //! max_rate_radps = 6.0              # dropping away from a drifting part
 //! max_angle_deg = 80.0              # |fence angle| limit, < 90
 //! jog_tilt_deg = 31.7               # optional: atan(mu) + 15 deg, capped at max_angle_deg
-//! [arrival]
+//! [feeder.arrival]
 //! x_m = 0.15                        # COM position and angle of the arriving part
 //! y_m = 0.1
 //! angle_deg = 30.0
-//! [goal]
+//! seed = 7                          # optional: draw x and the angle at random instead
+//! x_range_m = [0.1, 0.25]           # with seed: x uniform in it (default: 1/4..3/4 of the half width)
+//! [feeder.goal]
 //! contact_radius_m = 0.2            # optional: planner's default
-//! [noise]                           # optional: perturbs the execution (seeded)
+//! [feeder.noise]                    # optional: perturbs the execution (seeded)
 //! seed = 1
 //! belt_speed_rel = 0.0
 //! fence_mu_rel = 0.0
 //! arrival_xy_m = 0.0
 //! arrival_angle_deg = 0.0
-//! [planner]
+//! [feeder.planner]
 //! allow_convergent = true
-//! [sweep]                           # optional: random arrivals for `sweep`
-//! trials = 100
-//! seed = 7
-//! x_range_m = [0.1, 0.25]           # default: a quarter to 3/4 of the belt's half width
 //! ```
 
-use super::execute::{Noise, SweepSpec};
+use super::execute::Noise;
 use super::geometry::{Pose, Vec2};
 use super::part::Part;
 use super::planner::{Feeder, PlanOptions};
@@ -43,10 +43,12 @@ use super::primitives::Drive;
 use super::quasistatic::Medium;
 use super::sim::Setup;
 use super::FeederError;
-use serde::Deserialize;
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
 
-/// `[part]`.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// `[feeder.part]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PartTable {
     /// Polygon vertices `[x, y]`, m (either orientation, simple, >= 3).
@@ -55,8 +57,8 @@ pub struct PartTable {
     pub center_of_mass_m: Option<[f64; 2]>,
 }
 
-/// `[belt]`.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// `[feeder.belt]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct BeltTable {
     /// Belt speed, m/s (> 0; motion in -y).
@@ -65,8 +67,8 @@ pub struct BeltTable {
     pub width_m: f64,
 }
 
-/// `[fence]`.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// `[feeder.fence]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FenceTable {
     /// Length from the pivot, m (> 0).
@@ -92,37 +94,38 @@ impl FenceTable {
     /// friction angle atan mu so the part slides).
     pub fn drive(&self) -> Result<Drive, FeederError> {
         let push = check(
-            "fence.push_rate_radps",
+            "feeder.fence.push_rate_radps",
             self.push_rate_radps,
             |v| v > 0.0,
             "must be > 0",
         )?;
         let max_rate = check(
-            "fence.max_rate_radps",
+            "feeder.fence.max_rate_radps",
             self.max_rate_radps,
             |v| v >= push,
-            "must be >= fence.push_rate_radps",
+            "must be >= feeder.fence.push_rate_radps",
         )?;
         let max_angle = check(
-            "fence.max_angle_deg",
+            "feeder.fence.max_angle_deg",
             self.max_angle_deg,
             |v| v > 0.0 && v < 90.0,
             "must be in (0, 90)",
         )?
         .to_radians();
-        let friction_angle = check("fence.mu", self.mu, |v| v >= 0.0, "must be >= 0")?.atan();
+        let friction_angle =
+            check("feeder.fence.mu", self.mu, |v| v >= 0.0, "must be >= 0")?.atan();
         let tilt_default = (friction_angle + 15f64.to_radians()).min(max_angle);
         let jog_tilt_rad = match self.jog_tilt_deg {
             Some(d) => check(
-                "fence.jog_tilt_deg",
+                "feeder.fence.jog_tilt_deg",
                 d.to_radians(),
                 |v| v > friction_angle && v <= max_angle,
-                "must exceed atan(fence.mu) and not exceed fence.max_angle_deg",
+                "must exceed atan(feeder.fence.mu) and not exceed feeder.fence.max_angle_deg",
             )?,
             None if tilt_default > friction_angle + 1e-3 => tilt_default,
             None => {
-                let why = "must exceed atan(fence.mu) so the jogs can slide the part";
-                return Err(FeederError::param("fence.max_angle_deg", why));
+                let why = "must exceed atan(feeder.fence.mu) so the jogs can slide the part";
+                return Err(FeederError::param("feeder.fence.max_angle_deg", why));
             }
         };
         Ok(Drive {
@@ -144,29 +147,36 @@ fn default_max_angle() -> f64 {
     80.0
 }
 
-/// `[arrival]`.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// `[feeder.arrival]`: where the part is when the feed starts (the fence at 0).
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ArrivalTable {
-    /// COM x, m (the part within the belt's right half).
-    pub x_m: f64,
+    /// COM x, m (the part within the belt's right half). Required unless `seed` is given.
+    pub x_m: Option<f64>,
     /// COM y, m (the part wholly above the fence line y = 0).
     pub y_m: f64,
     /// Part angle, deg. Default 0.
     #[serde(default)]
     pub angle_deg: f64,
+    /// When given, x and the angle are drawn at random from this seed instead of `x_m`
+    /// and `angle_deg` (x uniform in `x_range_m`, the angle uniform in [0, 360) deg): a
+    /// sweep over it (`--range feeder.arrival.seed=1:200:200`) feeds random arrivals.
+    pub seed: Option<u64>,
+    /// The x range of drawn arrivals `[lo, hi]`, m. Default a quarter to three quarters
+    /// of the belt's half width.
+    pub x_range_m: Option<[f64; 2]>,
 }
 
-/// `[goal]`.
-#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+/// `[feeder.goal]`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct GoalTable {
     /// Goal contact radius, m (> 0). Default: the planner's choice.
     pub contact_radius_m: Option<f64>,
 }
 
-/// `[noise]` (standard deviations).
-#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+/// `[feeder.noise]` (standard deviations).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct NoiseTable {
     /// Seed. Default 0.
@@ -186,8 +196,8 @@ pub struct NoiseTable {
     pub arrival_angle_deg: f64,
 }
 
-/// `[planner]`.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// `[feeder.planner]`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlannerTable {
     /// Allow convergent turns. Default true.
@@ -207,42 +217,34 @@ fn yes() -> bool {
     true
 }
 
-/// `[sweep]`.
-#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SweepTable {
-    /// Arrivals (>= 1). Default 100.
-    pub trials: Option<usize>,
-    /// Seed. Default 0.
-    #[serde(default)]
-    pub seed: u64,
-    /// Arrival x range `[lo, hi]`, m. Default a quarter to three quarters of the half width.
-    pub x_range_m: Option<[f64; 2]>,
-}
-
-/// A whole feeder scene.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// The `[feeder]` table.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FeederScene {
-    /// `[part]`.
+    /// `[feeder.part]`.
     pub part: PartTable,
-    /// `[belt]`.
+    /// `[feeder.belt]`.
     pub belt: BeltTable,
-    /// `[fence]`.
+    /// `[feeder.fence]`.
     pub fence: FenceTable,
-    /// `[arrival]`.
+    /// `[feeder.arrival]`.
     pub arrival: ArrivalTable,
-    /// `[goal]`.
+    /// `[feeder.goal]`.
     #[serde(default)]
     pub goal: GoalTable,
-    /// `[noise]`.
+    /// `[feeder.noise]`.
     pub noise: Option<NoiseTable>,
-    /// `[planner]`.
+    /// `[feeder.planner]`.
     #[serde(default)]
     pub planner: PlannerTable,
-    /// `[sweep]`.
-    #[serde(default)]
-    pub sweep: SweepTable,
+}
+
+/// A feeder scene file: only a `[feeder]` table.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeederFile {
+    /// `[feeder]`.
+    pub feeder: FeederScene,
 }
 
 /// Everything a validated scene yields.
@@ -250,14 +252,14 @@ pub struct FeederScene {
 pub struct Built {
     /// The cell.
     pub feeder: Feeder,
-    /// Arrival pose.
+    /// Arrival pose (drawn when `feeder.arrival.seed` is given).
     pub arrival: Pose,
+    /// The seed the arrival was drawn from, if it was.
+    pub arrival_seed: Option<u64>,
     /// Planner options.
     pub options: PlanOptions,
-    /// Execution noise.
+    /// Execution noise (its seed already combined with the arrival's, see [`noise_seed`]).
     pub noise: Option<Noise>,
-    /// Sweep of arrivals.
-    pub sweep: SweepSpec,
 }
 
 fn check(key: &str, v: f64, ok: impl Fn(f64) -> bool, req: &str) -> Result<f64, FeederError> {
@@ -268,14 +270,26 @@ fn check(key: &str, v: f64, ok: impl Fn(f64) -> bool, req: &str) -> Result<f64, 
     }
 }
 
+/// The seed of the noise draws: `feeder.noise.seed`, combined with the arrival's seed when
+/// the arrival is drawn, so each random arrival of a sweep gets its own perturbation.
+pub fn noise_seed(noise_seed: u64, arrival_seed: Option<u64>) -> u64 {
+    match arrival_seed {
+        Some(s) => noise_seed ^ s.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+        None => noise_seed,
+    }
+}
+
 impl FeederScene {
-    /// Parses TOML text; unknown or mistyped keys are errors naming the dotted key.
+    /// Parses a whole scene file's TOML text (a `[feeder]` table); unknown or mistyped
+    /// keys are errors naming the dotted key.
     pub fn from_toml_str(text: &str) -> Result<Self, FeederError> {
         let de = toml::Deserializer::parse(text)
             .map_err(|e| FeederError::param("scene", &format!("is not valid TOML: {e}")))?;
-        serde_path_to_error::deserialize(de).map_err(|e| {
-            FeederError::param(&e.path().to_string(), &format!("is invalid: {}", e.inner()))
-        })
+        serde_path_to_error::deserialize::<_, FeederFile>(de)
+            .map(|f| f.feeder)
+            .map_err(|e| {
+                FeederError::param(&e.path().to_string(), &format!("is invalid: {}", e.inner()))
+            })
     }
 
     /// Validates every value and builds the cell.
@@ -292,14 +306,24 @@ impl FeederScene {
         )?;
         let pos = |v: f64| v > 0.0;
         let speed = check(
-            "belt.speed_mps",
+            "feeder.belt.speed_mps",
             self.belt.speed_mps,
             pos,
             "must be > 0 (the belt moves in -y)",
         )?;
-        let width = check("belt.width_m", self.belt.width_m, pos, "must be > 0")?;
-        let length = check("fence.length_m", self.fence.length_m, pos, "must be > 0")?;
-        let mu = check("fence.mu", self.fence.mu, |v| v >= 0.0, "must be >= 0")?;
+        let width = check("feeder.belt.width_m", self.belt.width_m, pos, "must be > 0")?;
+        let length = check(
+            "feeder.fence.length_m",
+            self.fence.length_m,
+            pos,
+            "must be > 0",
+        )?;
+        let mu = check(
+            "feeder.fence.mu",
+            self.fence.mu,
+            |v| v >= 0.0,
+            "must be >= 0",
+        )?;
         let feeder = Feeder {
             part,
             setup: Setup {
@@ -314,7 +338,12 @@ impl FeederScene {
         };
         let arrival = self.arrival_pose(&feeder)?;
         let goal = match self.goal.contact_radius_m {
-            Some(r) => Some(check("goal.contact_radius_m", r, pos, "must be > 0")?),
+            Some(r) => Some(check(
+                "feeder.goal.contact_radius_m",
+                r,
+                pos,
+                "must be > 0",
+            )?),
             None => None,
         };
         let options = PlanOptions {
@@ -322,22 +351,44 @@ impl FeederScene {
             goal_radius_m: goal,
             ..PlanOptions::default()
         };
-        let noise = self.noise.as_ref().map(noise_of).transpose()?;
-        let sweep = self.sweep_spec(&feeder)?;
+        let noise = self
+            .noise
+            .as_ref()
+            .map(|n| noise_of(n, self.arrival.seed))
+            .transpose()?;
         Ok(Built {
             feeder,
             arrival,
+            arrival_seed: self.arrival.seed,
             options,
             noise,
-            sweep,
         })
     }
 
+    /// The arrival pose: given, or drawn from `feeder.arrival.seed`; checked to lie above
+    /// the fence on the belt's right half.
     fn arrival_pose(&self, f: &Feeder) -> Result<Pose, FeederError> {
         let a = &self.arrival;
-        let x = check("arrival.x_m", a.x_m, |_| true, "must be finite")?;
-        let y = check("arrival.y_m", a.y_m, |_| true, "must be finite")?;
-        let ang = check("arrival.angle_deg", a.angle_deg, |_| true, "must be finite")?.to_radians();
+        let y = check("feeder.arrival.y_m", a.y_m, |_| true, "must be finite")?;
+        let (x, ang) = match a.seed {
+            Some(seed) => self.drawn_arrival(f, seed)?,
+            None => {
+                let x = a.x_m.ok_or_else(|| {
+                    FeederError::param(
+                        "feeder.arrival.x_m",
+                        "is required unless feeder.arrival.seed is given",
+                    )
+                })?;
+                let x = check("feeder.arrival.x_m", x, |_| true, "must be finite")?;
+                let ang = check(
+                    "feeder.arrival.angle_deg",
+                    a.angle_deg,
+                    |_| true,
+                    "must be finite",
+                )?;
+                (x, ang.to_radians())
+            }
+        };
         let pose = Pose {
             com_m: Vec2::new(x, y),
             angle_rad: ang,
@@ -345,7 +396,7 @@ impl FeederScene {
         let hull: Vec<Vec2> = f.part.hull.iter().map(|&v| pose.to_world(v)).collect();
         if hull.iter().any(|p| p.y <= 0.0) {
             return Err(FeederError::param(
-                "arrival.y_m",
+                "feeder.arrival.y_m",
                 "must place the whole part above the fence (y > 0)",
             ));
         }
@@ -353,50 +404,48 @@ impl FeederScene {
             .iter()
             .any(|p| p.x <= 0.0 || p.x >= f.setup.belt_edge_m)
         {
+            let key = match a.seed {
+                Some(_) => "feeder.arrival.x_range_m",
+                None => "feeder.arrival.x_m",
+            };
             return Err(FeederError::param(
-                "arrival.x_m",
-                "must place the whole part on the belt's right half (0 < x < belt.width_m / 2)",
+                key,
+                "must place the whole part on the belt's right half (0 < x < feeder.belt.width_m / 2)",
+            ));
+        }
+        if hull.iter().any(|p| p.x >= f.setup.fence_length_m) {
+            let key = match a.seed {
+                Some(_) => "feeder.arrival.x_range_m",
+                None => "feeder.arrival.x_m",
+            };
+            return Err(FeederError::param(
+                key,
+                "must place the whole part over the fence (x < feeder.fence.length_m), or it drifts past the fence's tip",
             ));
         }
         Ok(pose)
     }
 
-    fn sweep_spec(&self, f: &Feeder) -> Result<SweepSpec, FeederError> {
-        let s = &self.sweep;
-        let trials = s.trials.unwrap_or(100);
-        if trials == 0 {
-            return Err(FeederError::param("sweep.trials", "must be >= 1"));
-        }
+    /// (x, angle) drawn from `seed`: x uniform in the range, the angle uniform in [0, 2 pi).
+    fn drawn_arrival(&self, f: &Feeder, seed: u64) -> Result<(f64, f64), FeederError> {
         let half = f.setup.belt_edge_m;
-        let [lo, hi] = s.x_range_m.unwrap_or([0.25 * half, 0.75 * half]);
-        let lo = check(
-            "sweep.x_range_m",
-            lo,
-            |v| v - f.part.radius_m > 0.0,
-            "must keep the part on the belt's right half",
-        )?;
-        check(
-            "sweep.x_range_m",
-            hi,
-            |v| v >= lo && v + f.part.radius_m < half,
-            "must be [lo, hi] with the part on the belt's right half",
-        )?;
-        Ok(SweepSpec {
-            trials,
-            seed: s.seed,
-            x_range_m: (lo, hi),
-            y_m: 2.0 * f.part.radius_m,
-        })
+        let key = "feeder.arrival.x_range_m";
+        let [lo, hi] = self.arrival.x_range_m.unwrap_or([0.25 * half, 0.75 * half]);
+        let lo = check(key, lo, |v| v > 0.0, "must be [lo, hi] with 0 < lo <= hi")?;
+        let hi = check(key, hi, |v| v >= lo, "must be [lo, hi] with 0 < lo <= hi")?;
+        let mut rng = StdRng::seed_from_u64(seed);
+        let x = rng.random_range(lo..=hi);
+        Ok((x, rng.random_range(0.0..std::f64::consts::TAU)))
     }
 }
 
-fn noise_of(n: &NoiseTable) -> Result<Noise, FeederError> {
+fn noise_of(n: &NoiseTable, arrival_seed: Option<u64>) -> Result<Noise, FeederError> {
     let nn = |k: &str, v: f64| check(k, v, |v| v >= 0.0, "must be >= 0");
     Ok(Noise {
-        seed: n.seed,
-        belt_speed_rel: nn("noise.belt_speed_rel", n.belt_speed_rel)?,
-        fence_mu_rel: nn("noise.fence_mu_rel", n.fence_mu_rel)?,
-        arrival_xy_m: nn("noise.arrival_xy_m", n.arrival_xy_m)?,
-        arrival_angle_rad: nn("noise.arrival_angle_deg", n.arrival_angle_deg)?.to_radians(),
+        seed: noise_seed(n.seed, arrival_seed),
+        belt_speed_rel: nn("feeder.noise.belt_speed_rel", n.belt_speed_rel)?,
+        fence_mu_rel: nn("feeder.noise.fence_mu_rel", n.fence_mu_rel)?,
+        arrival_xy_m: nn("feeder.noise.arrival_xy_m", n.arrival_xy_m)?,
+        arrival_angle_rad: nn("feeder.noise.arrival_angle_deg", n.arrival_angle_deg)?.to_radians(),
     })
 }

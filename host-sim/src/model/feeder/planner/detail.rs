@@ -3,7 +3,11 @@
 //! left: what the execution will do, noise aside.
 
 use super::super::geometry::Pose;
-use super::super::primitives::{slide_speed_mps, turn_drift_m, turn_schedule, Primitive, SETTLE_S};
+use super::super::primitives::{
+    jog_tilts, slide_speed_mps, turn_drift_m, turn_landing_radius_m, turn_schedule, Primitive,
+    TurnPushes, SETTLE_S,
+};
+use super::super::pushes::extend;
 use super::super::quasistatic::{Mode, Motion};
 use super::super::sim::{flush_edge, run, run_until, Schedule};
 use super::Feeder;
@@ -97,42 +101,54 @@ pub fn arrive(f: &Feeder, arrival: Pose, max_s: f64) -> Result<Piece, String> {
     Ok((st, prim, sched))
 }
 
-/// Schedule of a jog from `st` with tilt `tilt` (> 0 inward) held `hold_s`.
-fn jog_schedule(f: &Feeder, st: &State, tilt: f64, hold_s: f64) -> Schedule {
+/// Schedule of a jog from `st` with tilt `tilt` (> 0 inward) held `hold_s`, ending near
+/// `target_m`: the tilt up (inward) is a stable push at the starting radius, the return
+/// from -tilt (outward) one at the target radius, each with its rate profile
+/// ([`Feeder::push_profile`]); the moves down are slow enough for the part to follow.
+fn jog_schedule(
+    f: &Feeder,
+    st: &State,
+    tilt: f64,
+    hold_s: f64,
+    target_m: f64,
+) -> Result<Schedule, String> {
     let e = &f.part.edges[st.edge];
     let vb = f.setup.medium.belt_speed_mps;
     // A fence turning down keeps the part in contact while omega (r + b) < v_b cos tilt.
-    let reach = st.r_m + e.b_m() + f.part.radius_m;
+    let reach = st.r_m.max(target_m) + e.b_m() + f.part.radius_m;
     let down = f.drive.push_rate_radps.min(0.5 * vb * tilt.cos() / reach);
+    let no_push = |r: f64| format!("jog on edge {}: no stable push at r = {r:.4} m", st.edge);
     let mut s = Schedule::starting(st.t_s, 0.0);
     if tilt > 0.0 {
-        s.move_to(tilt, f.drive.push_rate_radps);
+        let up = f
+            .push_profile(st.edge, st.r_m, 0.0, tilt)
+            .ok_or_else(|| no_push(st.r_m))?;
+        extend(&mut s, &up);
         s.hold(hold_s);
         s.move_to(0.0, down);
     } else {
+        let back = f
+            .push_profile(st.edge, target_m, tilt, 0.0)
+            .ok_or_else(|| no_push(target_m))?;
         s.move_to(tilt, down);
         s.hold(hold_s);
-        s.move_to(0.0, f.drive.push_rate_radps);
+        extend(&mut s, &back);
     }
     s.hold(SETTLE_S);
-    s
+    Ok(s)
 }
 
 /// A simulated jog outcome: the rest state and the schedule.
 type Tried = Result<(State, Schedule), String>;
 
-/// Plans the jog from `st` to radius `target_m` on the same edge: the hold time by a
-/// secant iteration on simulated outcomes (then the tilt, for changes smaller than the
-/// tilt alone makes).
+/// Plans the jog from `st` to radius `target_m` on the same edge: for each tilt of
+/// [`jog_tilts`] (steepest first, the ones the optimizer allowed for), the hold time by a
+/// secant iteration on simulated outcomes; failing those, the steepest tilt bisected with
+/// no hold (for changes smaller than the tilt alone makes).
 pub fn jog(f: &Feeder, st: &State, target_m: f64) -> Result<Piece, String> {
     let dr = target_m - st.r_m;
-    let tilt = if dr < 0.0 {
-        f.drive.jog_tilt_rad
-    } else {
-        -f.drive.jog_tilt_rad
-    };
     let outcome = |tilt: f64, hold: f64| -> Tried {
-        let s = jog_schedule(f, st, tilt, hold);
+        let s = jog_schedule(f, st, tilt, hold, target_m)?;
         let end = settle_on(f, st, &s)?;
         if end.edge != st.edge {
             return Err(format!(
@@ -142,23 +158,38 @@ pub fn jog(f: &Feeder, st: &State, target_m: f64) -> Result<Piece, String> {
         }
         Ok((end, s))
     };
-    let full = outcome(tilt, 0.0);
-    let short = full
-        .as_ref()
-        .is_ok_and(|b| (b.0.r_m - target_m) * dr.signum() < 0.0);
-    let (tilt_used, hold, best) = match full {
-        Ok(b) if short => {
-            let speed =
-                slide_speed_mps(f.setup.medium.belt_speed_mps, f.setup.medium.fence_mu, tilt);
-            let (hold, best) = secant_hold(&outcome, b, tilt, target_m, speed)?;
-            (tilt, hold, best)
+    let sign = if dr < 0.0 { 1.0 } else { -1.0 };
+    let mut best = None;
+    for t in jog_tilts(&f.drive, f.setup.medium.fence_mu) {
+        let tilt = sign * t;
+        let Ok(b) = outcome(tilt, 0.0) else { continue };
+        if (b.0.r_m - target_m) * dr.signum() >= 0.0 {
+            break; // the tilt alone reaches: bisect the tilt below
         }
-        _ => {
-            let (t, best) = bisect_tilt(&outcome, tilt, target_m, dr)
-                .ok_or_else(|| format!("jog on edge {} found no workable tilt", st.edge))?;
-            (t, 0.0, best)
+        let speed = slide_speed_mps(f.setup.medium.belt_speed_mps, f.setup.medium.fence_mu, tilt);
+        let Ok((hold, b)) = secant_hold(&outcome, b, tilt, target_m, speed) else {
+            continue;
+        };
+        let done = (b.0.r_m - target_m).abs() <= 25.0 * JOG_TOL_M;
+        best = Some((tilt, hold, b));
+        if done {
+            break;
         }
+    }
+    let reached = |b: &Option<(f64, f64, (State, Schedule))>| {
+        b.as_ref()
+            .is_some_and(|b| (b.2 .0.r_m - target_m).abs() <= 25.0 * JOG_TOL_M)
     };
+    if !reached(&best) {
+        let tilt = sign * f.drive.jog_tilt_rad;
+        if let Some((t, b)) = bisect_tilt(&outcome, tilt, target_m, dr) {
+            if reached(&Some((t, 0.0, b.clone()))) || best.is_none() {
+                best = Some((t, 0.0, b));
+            }
+        }
+    }
+    let (tilt_used, hold, best) =
+        best.ok_or_else(|| format!("jog on edge {} found no workable tilt", st.edge))?;
     let (end, sched) = best;
     if (end.r_m - target_m).abs() > 25.0 * JOG_TOL_M {
         return Err(format!(
@@ -255,7 +286,25 @@ pub fn turn(
         psi,
         theta_minus,
     );
-    let (sched, _) = turn_schedule(st.t_s, &f.drive, vb, tp, theta_minus, d)
+    let pushes = if via {
+        let up = f
+            .push_profile(st.edge, st.r_m, 0.0, tp)
+            .ok_or("convergent turn: no stable push to theta+")?;
+        TurnPushes {
+            up,
+            ..TurnPushes::fixed(f.drive.push_rate_radps, tp)
+        }
+    } else {
+        let r2 = turn_landing_radius_m(
+            &p.edges[st.edge],
+            &p.edges[catch_edge],
+            st.r_m,
+            psi,
+            theta_minus,
+        );
+        f.turn_pushes((st.edge, st.r_m, tp), (catch_edge, r2, theta_minus))?
+    };
+    let (sched, _) = turn_schedule(st.t_s, &f.drive, vb, theta_minus, d, &pushes)
         .ok_or("no time to drop the fence and rise again")?;
     let end = settle_on(f, st, &sched)?;
     if end.edge != to_edge {

@@ -23,8 +23,9 @@ pub mod optimize;
 use super::geometry::Pose;
 use super::part::Part;
 use super::primitives::{
-    can_jog, jog_tilts, turn_landing_radius_m, turn_min_drift_s, Drive, Primitive,
+    can_jog, jog_tilts, turn_landing_radius_m, turn_min_drift_s, Drive, Primitive, TurnPushes,
 };
+use super::pushes::{self, Profile};
 use super::sim::{Schedule, Setup};
 use super::stability::x_range_on_arc;
 use super::FeederError;
@@ -42,6 +43,82 @@ pub struct Feeder {
     pub setup: Setup,
     /// Fence rates and angle limits.
     pub drive: Drive,
+}
+
+impl Feeder {
+    /// The rate profile of a counter-clockwise stable push of hull edge `edge` at contact
+    /// radius `r_m` from `from_rad` to `to_rad` ([`pushes::profile`]); `None` when some
+    /// angle has no stable rate up to the push rate.
+    pub fn push_profile(
+        &self,
+        edge: usize,
+        r_m: f64,
+        from_rad: f64,
+        to_rad: f64,
+    ) -> Option<Profile> {
+        pushes::profile(
+            &self.part.edges[edge],
+            self.part.rho_m,
+            r_m,
+            from_rad,
+            to_rad,
+            self.drive.push_rate_radps,
+            self.setup.medium.belt_speed_mps,
+            self.setup.medium.fence_mu,
+        )
+    }
+
+    /// The fence's rate as it meets `edge` at radius `r_m` at `theta_minus` (the first
+    /// cell of the push back to 0); `None` when that push has no stable rate there.
+    pub fn catch_rate(&self, edge: usize, r_m: f64, theta_minus: f64) -> Option<f64> {
+        pushes::start_rate(
+            &self.part.edges[edge],
+            self.part.rho_m,
+            r_m,
+            theta_minus,
+            0.0,
+            self.drive.push_rate_radps,
+            self.setup.medium.belt_speed_mps,
+            self.setup.medium.fence_mu,
+        )
+    }
+
+    /// Estimated time of a stable push of `edge` at `r_m` from `from_rad` to `to_rad`, s
+    /// ([`pushes::time_estimate_s`]).
+    pub fn push_time_s(&self, edge: usize, r_m: f64, from_rad: f64, to_rad: f64) -> f64 {
+        pushes::time_estimate_s(
+            &self.part.edges[edge],
+            self.part.rho_m,
+            r_m,
+            from_rad,
+            to_rad,
+            self.drive.push_rate_radps,
+            self.setup.medium.belt_speed_mps,
+            self.setup.medium.fence_mu,
+        )
+    }
+
+    /// The pushes of a turn from `from` at radius `r_m` up to `theta_plus` onto `to`,
+    /// landing at `r2_m` and pushed back from `theta_minus`; `Err` names the push without a
+    /// stable rate.
+    pub fn turn_pushes(
+        &self,
+        (from, r_m, theta_plus): (usize, f64, f64),
+        (to, r2_m, theta_minus): (usize, f64, f64),
+    ) -> Result<TurnPushes, String> {
+        let up = self
+            .push_profile(from, r_m, 0.0, theta_plus)
+            .ok_or_else(|| format!("no stable push of edge {from} to theta+ at r = {r_m:.4} m"))?;
+        let back = self
+            .push_profile(to, r2_m, theta_minus, 0.0)
+            .ok_or_else(|| format!("no stable push of edge {to} from theta- at r = {r2_m:.4} m"))?;
+        let catch_rate = back.first().map_or(self.drive.push_rate_radps, |b| b.1);
+        Ok(TurnPushes {
+            up,
+            catch_rate,
+            back,
+        })
+    }
 }
 
 /// Planner switches.
@@ -110,7 +187,10 @@ pub fn default_goal_radius(f: &Feeder, t: &RadiusTable, goal: usize) -> f64 {
         .map(|&a| t.down(goal, -a))
         .fold(f64::INFINITY, f64::min)
         + pad;
-    let base = e.a_m + pad;
+    // The part must stay right of the pivot line x = 0 through the jog's tilts: every hull
+    // point's x is r cos(theta) plus its x at r = 0, so x >= r cos(tilt) + lo_0.
+    let lo_0 = x_range_on_arc(&f.part, goal, 0.0, -tilt, tilt).0;
+    let base = (e.a_m + pad).max((pad - lo_0) / tilt.cos());
     let out_ok = can_jog(e, mu, true) && down.max(base) < hi;
     let in_ok = can_jog(e, mu, false) && up.max(base) < hi;
     match (out_ok, in_ok) {
@@ -237,7 +317,7 @@ fn turn_lower_radius(f: &Feeder, t: &RadiusTable, from: usize, catch: usize, tm:
     let (e, e2) = (&p.edges[from], &p.edges[catch]);
     let psi = p.rotation_between(from, catch);
     let (tp, vb) = (tm + psi, f.setup.medium.belt_speed_mps);
-    let d_min = vb * (1.05 * turn_min_drift_s(&f.drive, tp, tm) + 0.02);
+    let d_min = vb * (1.05 * turn_min_drift_s(&f.drive, tp, tm, f.drive.push_rate_radps) + 0.02);
     let by_drift = (d_min * tm.cos() - e.h_m * psi.cos() + e2.h_m) / psi.sin().max(1e-9);
     t.up(from, tp)
         .max(e.a_m + 1.3 * vb * tp.cos() / f.drive.max_rate_radps)
@@ -378,7 +458,7 @@ fn diagnose(
     let g = &p.edges[goal];
     let (lo, hi) = (g.a_m, f.setup.fence_length_m - g.b_m());
     if !(lo..=hi).contains(&r_goal) {
-        return format!("goal.contact_radius_m = {r_goal:.4} m is outside the fence's range [{lo:.4}, {hi:.4}] m for goal edge {goal}");
+        return format!("feeder.goal.contact_radius_m = {r_goal:.4} m is outside the fence's range [{lo:.4}, {hi:.4}] m for goal edge {goal}");
     }
     let (mut need_fence, mut need_belt) = (f64::INFINITY, f64::INFINITY);
     for seq in seqs {
@@ -387,13 +467,13 @@ fn diagnose(
         need_belt = need_belt.min(belt);
     }
     if need_fence.is_infinite() {
-        return format!("every sequence from edge {} to goal edge {goal} needs a turn beyond fence.max_angle_deg = {:.1}", st.edge, deg(f.drive.max_angle_rad));
+        return format!("every sequence from edge {} to goal edge {goal} needs a turn beyond feeder.fence.max_angle_deg = {:.1}", st.edge, deg(f.drive.max_angle_rad));
     }
     if need_fence > f.setup.fence_length_m {
-        return format!("fence too short: the minimum contact radius for the stable pushes needs fence.length_m >= {need_fence:.3} m (it is {:.3} m)", f.setup.fence_length_m);
+        return format!("fence too short: the minimum contact radius for the stable pushes needs feeder.fence.length_m >= {need_fence:.3} m (it is {:.3} m)", f.setup.fence_length_m);
     }
     if need_belt > f.setup.belt_edge_m {
-        return format!("belt too narrow: at the minimum contact radius the part reaches x = {need_belt:.3} m, beyond the belt's half width {:.3} m (belt.width_m >= {:.3} m needed)", f.setup.belt_edge_m, 2.0 * need_belt);
+        return format!("belt too narrow: at the minimum contact radius the part reaches x = {need_belt:.3} m, beyond the belt's half width {:.3} m (feeder.belt.width_m >= {:.3} m needed)", f.setup.belt_edge_m, 2.0 * need_belt);
     }
     format!(
         "no sequence from edge {} to goal edge {goal} satisfied every constraint ({})",

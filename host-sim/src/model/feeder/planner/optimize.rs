@@ -22,10 +22,12 @@
 use super::super::geometry::{Pose, Vec2};
 use super::super::part::Part;
 use super::super::primitives::{
-    can_jog, jog_estimate_s, jog_tilts, turn_drift_m, turn_duration_s, turn_landing_radius_m,
-    turn_min_drift_s, turn_schedule,
+    can_jog, drop_and_catch, jog_estimate_s, jog_tilts, turn_drift_m, turn_landing_radius_m,
+    turn_min_drift_s,
 };
-use super::super::stability::{min_radius_at, x_range_on_arc, ANGLE_GRID_RAD};
+use super::super::pushes::{min_radius_free, RATE_SPAN};
+use super::super::sim::Schedule;
+use super::super::stability::{x_range_on_arc, ANGLE_GRID_RAD};
 use super::goal::Sequence;
 use super::Feeder;
 use cobyla::{minimize, Func, RhoBeg, StopTols};
@@ -39,7 +41,8 @@ pub const MAX_EVALS: usize = 400;
 /// active constraints, and the simulation must not graze them.
 pub const PLAN_MARGIN: f64 = 0.05;
 
-/// Cumulative minimum contact radii per edge at the push rate, on the angle grid:
+/// Cumulative minimum contact radii per edge for pushes at rates up to the push rate
+/// ([`super::super::pushes`]), on the angle grid:
 /// `up[e][i]` covers fence angles 0..i*grid, `down[e][i]` covers -i*grid..0.
 #[derive(Clone, Debug)]
 pub struct RadiusTable {
@@ -48,7 +51,8 @@ pub struct RadiusTable {
 }
 
 impl RadiusTable {
-    /// Tabulates [`min_radius_at`] for every hull edge of `f.part`.
+    /// Tabulates the free-rate minimum radius ([`min_radius_free`]) for every hull edge of
+    /// `f.part`.
     pub fn new(f: &Feeder) -> Self {
         let n = (f.drive.max_angle_rad / ANGLE_GRID_RAD).ceil() as usize + 1;
         let (w, vb, mu) = (
@@ -64,7 +68,7 @@ impl RadiusTable {
                     let mut acc = 0.0f64;
                     (0..=n)
                         .map(|i| {
-                            acc = acc.max(min_radius_at(
+                            acc = acc.max(min_radius_free(
                                 e,
                                 f.part.rho_m,
                                 sign * i as f64 * ANGLE_GRID_RAD,
@@ -182,14 +186,11 @@ impl Ctx<'_> {
             let e = self.seq.edges[k];
             cost += jog_estimate_s(&f.drive, vb, mu, c.r_before_m - r_prev);
             jog_constraints(f, self.t, e, r_prev, c.r_before_m, &mut cons);
-            cost += turn_duration_s(
-                &f.drive,
-                vb,
-                c.theta_plus_rad,
-                c.theta_minus_rad,
-                c.drift_m.max(0.0),
-            );
-            turn_constraints(f, self.t, e, self.seq.edges[k + 1], c, &mut cons);
+            let to = self.seq.edges[k + 1];
+            cost += f.push_time_s(e, c.r_before_m, 0.0, c.theta_plus_rad)
+                + c.drift_m.max(0.0) / vb
+                + f.push_time_s(to, c.r_after_m, c.theta_minus_rad, 0.0);
+            turn_constraints(f, self.t, e, to, c, &mut cons);
             r_prev = c.r_after_m;
         }
         let goal = *self.seq.edges.last().unwrap_or(&0);
@@ -294,7 +295,8 @@ pub fn turn_constraints(
     cons.push(("turn: part off the belt during the push to theta+", b1));
     let b2 = belt_slack(f, to, c.r_after_m, c.theta_minus_rad, 0.0);
     cons.push(("turn: part off the belt during the push from theta-", b2));
-    let min_drift = turn_min_drift_s(&f.drive, c.theta_plus_rad, c.theta_minus_rad);
+    let catch = catch_rate(f, to, c);
+    let min_drift = turn_min_drift_s(&f.drive, c.theta_plus_rad, c.theta_minus_rad, catch);
     cons.push((
         "turn: drift too short to drop the fence and rise again",
         c.drift_m / vb - 1.05 * min_drift - 0.01,
@@ -305,25 +307,28 @@ pub fn turn_constraints(
         "turn: the fence cannot leave the part faster than it drifts",
         sep / (vb.abs() + 1e-12),
     ));
-    let clear = drift_clearance(f, from, c) / scale - PLAN_MARGIN;
+    let clear = drift_clearance(f, from, c, catch) / scale - PLAN_MARGIN;
     cons.push(("turn: the fence touches the part during the drift", clear));
 }
 
+/// The fence's rate at the catch of turn `c` onto `to` (the slowest rate where the push
+/// back has no stable one: the table's constraint reports that).
+pub fn catch_rate(f: &Feeder, to: usize, c: &TurnChoice) -> f64 {
+    f.catch_rate(to, c.r_after_m, c.theta_minus_rad)
+        .unwrap_or(f.drive.push_rate_radps / RATE_SPAN)
+}
+
 /// Smallest distance, m, between the fence segment and the drifting part, sampled over
-/// the drift (before the catch); negative when they would touch.
-pub fn drift_clearance(f: &Feeder, from: usize, c: &TurnChoice) -> f64 {
+/// the drift (before the catch at `catch` rad/s); negative when they would touch.
+pub fn drift_clearance(f: &Feeder, from: usize, c: &TurnChoice, catch: f64) -> f64 {
     let vb = f.setup.medium.belt_speed_mps;
-    let Some((sched, t_catch)) = turn_schedule(
-        0.0,
-        &f.drive,
-        vb,
-        c.theta_plus_rad,
-        c.theta_minus_rad,
-        c.drift_m.max(0.0),
-    ) else {
+    let mut sched = Schedule::starting(0.0, c.theta_plus_rad);
+    let drift = c.drift_m.max(0.0);
+    let Some(t_catch) = drop_and_catch(&mut sched, &f.drive, vb, c.theta_minus_rad, drift, catch)
+    else {
         return -f.part.radius_m;
     };
-    let t_rel = c.theta_plus_rad / f.drive.push_rate_radps;
+    let t_rel = 0.0;
     let e = &f.part.edges[from];
     let release = Pose {
         com_m: Vec2::new(c.r_before_m, e.h_m).rotate(c.theta_plus_rad),
@@ -369,7 +374,7 @@ pub fn solve(
         let ps = p.rotation_between(w[0], w[1]);
         let (lo, hi) = theta_minus_bounds(f.drive.max_angle_rad, ps).ok_or_else(|| {
             format!(
-                "a {:.0} deg turn needs fence angles beyond fence.max_angle_deg",
+                "a {:.0} deg turn needs fence angles beyond feeder.fence.max_angle_deg",
                 ps.to_degrees()
             )
         })?;
@@ -507,7 +512,7 @@ fn least_radius(ctx: &Ctx, k: usize, tm: f64, r_prev: f64) -> f64 {
     let tp = tm + psi;
     let mut r = ctx.t.up(ctx.seq.edges[k], tp);
     r = r.max(e.a_m + 1.3 * vb * tp.cos() / f.drive.max_rate_radps);
-    let d_min = vb * (1.05 * turn_min_drift_s(&f.drive, tp, tm) + 0.02);
+    let d_min = vb * (1.05 * turn_min_drift_s(&f.drive, tp, tm, f.drive.push_rate_radps) + 0.02);
     r = r.max((d_min * tm.cos() - e.h_m * psi.cos() + e2.h_m) / psi.sin().max(1e-9));
     // r' = A r + B with A = cos theta+ / cos theta- > 0.
     let a = tp.cos() / tm.cos();
