@@ -83,6 +83,12 @@ impl HilReport {
 pub trait StepController<C: FixedRate = Controller> {
     /// One control step.
     fn step(&mut self, frame: &C::Frame) -> Result<StepOutput<C::Command>, ControllerError>;
+    /// One control step, the command only: for a loop that does not read the telemetry
+    /// ([`Sil`] then skips building it). The same step as [`step`](StepController::step).
+    #[inline]
+    fn command(&mut self, frame: &C::Frame) -> Result<C::Command, ControllerError> {
+        self.step(frame).map(|out| out.command)
+    }
     /// HIL figures, for controllers that run on the target (None for SIL).
     fn hil_report(&self) -> Option<HilReport> {
         None
@@ -115,6 +121,10 @@ impl<C: FixedRate> StepController<C> for Sil<C> {
             command,
             telemetry: self.controller.telemetry(),
         })
+    }
+    #[inline]
+    fn command(&mut self, frame: &C::Frame) -> Result<C::Command, ControllerError> {
+        Ok(self.controller.step(frame))
     }
 }
 
@@ -200,28 +210,38 @@ impl SafeSteps {
 }
 
 /// A controller stepped through [`SafeSteps`]: every system with a controller steps it
-/// through this, so its safe-state steps are counted the same way in SIL and HIL.
-pub struct Counted<'a, C: FixedRate> {
-    inner: &'a mut dyn StepController<C>,
+/// through this, so its safe-state steps are counted the same way in SIL and HIL. `T` is
+/// the controller's type: a `dyn StepController` by default (SIL or HIL, chosen at run
+/// time), or a concrete one (e.g. [`Sil`]) for a loop monomorphized for it.
+pub struct Counted<'a, C: FixedRate, T: ?Sized + StepController<C> = dyn StepController<C> + 'a> {
+    inner: &'a mut T,
     /// The counts so far.
     pub safe: SafeSteps,
+    _kind: std::marker::PhantomData<C>,
 }
 
-impl<'a, C: FixedRate> Counted<'a, C> {
+impl<'a, C: FixedRate, T: ?Sized + StepController<C>> Counted<'a, C, T> {
     /// Count the steps of `inner`.
-    pub fn new(inner: &'a mut dyn StepController<C>) -> Self {
+    pub fn new(inner: &'a mut T) -> Self {
         Self {
             inner,
             safe: SafeSteps::default(),
+            _kind: std::marker::PhantomData,
         }
     }
 }
 
-impl<C: FixedRate> StepController<C> for Counted<'_, C> {
+impl<C: FixedRate, T: ?Sized + StepController<C>> StepController<C> for Counted<'_, C, T> {
     fn step(&mut self, frame: &C::Frame) -> Result<StepOutput<C::Command>, ControllerError> {
         let out = self.inner.step(frame)?;
         self.safe.record(&out.command);
         Ok(out)
+    }
+    #[inline]
+    fn command(&mut self, frame: &C::Frame) -> Result<C::Command, ControllerError> {
+        let command = self.inner.command(frame)?;
+        self.safe.record(&command);
+        Ok(command)
     }
     fn hil_report(&self) -> Option<HilReport> {
         self.inner.hil_report()

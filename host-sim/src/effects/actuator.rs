@@ -14,6 +14,19 @@ pub trait Actuator {
     fn accel(&self, paddle: &PaddleState<f64>, command_mps2: f64) -> f64;
     /// Time until the regime with acceleration `accel_mps2` ends, s (infinite if never).
     fn time_to_switch(&self, paddle: &PaddleState<f64>, accel_mps2: f64) -> f64;
+    /// As [`time_to_switch`](Actuator::time_to_switch) when that is shorter than
+    /// `within_s`, else any value `>= within_s`: for a caller that only needs to know that
+    /// the regime outlasts its segment (a model may then skip work).
+    #[inline]
+    fn time_to_switch_within(
+        &self,
+        paddle: &PaddleState<f64>,
+        accel_mps2: f64,
+        within_s: f64,
+    ) -> f64 {
+        let _ = within_s;
+        self.time_to_switch(paddle, accel_mps2)
+    }
     /// Snap the state onto the limit that was just reached (removes rounding).
     fn settle(&self, paddle: &mut PaddleState<f64>);
 }
@@ -49,6 +62,61 @@ pub struct SecondOrderActuator {
     pub max_height_m: f64,
 }
 
+/// How far, relative to the room to the nearer stop, the paddle's largest travel must
+/// stay short of it for [`SecondOrderActuator::stops_out_of_reach`] to skip the stops'
+/// roots (1e-9: millions of ulps, so the roots could not have found a stop earlier).
+const STOP_CLEARANCE: f64 = 1e-9;
+
+impl SecondOrderActuator {
+    /// True if the paddle at `p` with acceleration `a` cannot reach either travel stop
+    /// within `horizon_s` (s): its largest travel `|v| t + |a| t^2 / 2` is short of the
+    /// room to the nearer stop by a margin ([`STOP_CLEARANCE`]). Then no stop ends the
+    /// regime before the horizon, and the roots of the stops are not needed. False for a
+    /// paddle at a stop, an infinite horizon or non-finite input (the roots decide).
+    #[inline]
+    fn stops_out_of_reach(&self, p: &PaddleState<f64>, a: f64, horizon_s: f64) -> bool {
+        let travel_m = horizon_s * (p.velocity_mps.abs() + 0.5 * a.abs() * horizon_s);
+        let room_m = (self.max_height_m - p.height_m).min(p.height_m - self.min_height_m);
+        travel_m * (1.0 + STOP_CLEARANCE) < room_m * (1.0 - STOP_CLEARANCE)
+    }
+
+    /// Time until the speed limit ends acceleration `a` from `p`, s (infinite if never).
+    #[inline]
+    fn time_to_speed_limit(&self, p: &PaddleState<f64>, a: f64) -> f64 {
+        if a > 0.0 && p.velocity_mps < self.velocity_max_mps {
+            (self.velocity_max_mps - p.velocity_mps) / a
+        } else if a < 0.0 && p.velocity_mps > -self.velocity_max_mps {
+            (-self.velocity_max_mps - p.velocity_mps) / a
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The earlier of `t_s` and the first time the room to a travel stop closes, s (the
+    /// stops' roots, searched up to `t_s`).
+    fn time_to_stop_or(&self, p: &PaddleState<f64>, a: f64, t_s: f64) -> f64 {
+        let mut t = t_s;
+        let up = first_contact(
+            self.max_height_m - p.height_m,
+            -p.velocity_mps,
+            -0.5 * a,
+            t.min(1e9),
+        );
+        let down = first_contact(
+            p.height_m - self.min_height_m,
+            p.velocity_mps,
+            0.5 * a,
+            t.min(1e9),
+        );
+        for c in [up, down].into_iter().flatten() {
+            if c.time_s > 0.0 {
+                t = t.min(c.time_s);
+            }
+        }
+        t
+    }
+}
+
 impl Actuator for SecondOrderActuator {
     fn accel(&self, p: &PaddleState<f64>, command_mps2: f64) -> f64 {
         let a = if command_mps2.is_finite() {
@@ -70,31 +138,16 @@ impl Actuator for SecondOrderActuator {
     }
 
     fn time_to_switch(&self, p: &PaddleState<f64>, a: f64) -> f64 {
-        let mut t = f64::INFINITY;
-        if a > 0.0 && p.velocity_mps < self.velocity_max_mps {
-            t = t.min((self.velocity_max_mps - p.velocity_mps) / a);
-        } else if a < 0.0 && p.velocity_mps > -self.velocity_max_mps {
-            t = t.min((-self.velocity_max_mps - p.velocity_mps) / a);
+        self.time_to_stop_or(p, a, self.time_to_speed_limit(p, a))
+    }
+
+    fn time_to_switch_within(&self, p: &PaddleState<f64>, a: f64, within_s: f64) -> f64 {
+        let t = self.time_to_speed_limit(p, a);
+        if self.stops_out_of_reach(p, a, t.min(within_s)) {
+            // the speed limit (or nothing) ends the regime, or it outlasts the segment
+            return t;
         }
-        // travel stops: first time the room to each stop closes
-        let up = first_contact(
-            self.max_height_m - p.height_m,
-            -p.velocity_mps,
-            -0.5 * a,
-            t.min(1e9),
-        );
-        let down = first_contact(
-            p.height_m - self.min_height_m,
-            p.velocity_mps,
-            0.5 * a,
-            t.min(1e9),
-        );
-        for c in [up, down].into_iter().flatten() {
-            if c.time_s > 0.0 {
-                t = t.min(c.time_s);
-            }
-        }
-        t
+        self.time_to_stop_or(p, a, t)
     }
 
     fn settle(&self, p: &mut PaddleState<f64>) {
@@ -117,6 +170,39 @@ impl Actuator for SecondOrderActuator {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+        /// The shortcut for a regime that outlasts the segment answers as the full
+        /// computation does: the same time when that is shorter than the segment, else a
+        /// time no shorter than the segment. States range over the travel, up to and past
+        /// the speed limit, close to the stops (the shortcut's edge) and on them.
+        #[test]
+        fn switch_times_match_the_full_roots(
+            h in -1.2f64..1.2,
+            near_stop_exp in -14i32..0,
+            v in -2.5f64..2.5,
+            a in -12.0f64..12.0,
+            within in 1e-4f64..1.0,
+            pick in 0u8..3,
+        ) {
+            let act = act();
+            let height_m = match pick {
+                0 => h.clamp(-1.0, 1.0),
+                1 => 1.0 - 10f64.powi(near_stop_exp),
+                _ => -1.0 + 10f64.powi(near_stop_exp),
+            };
+            let p = PaddleState::new(height_m, v);
+            let full = act.time_to_switch(&p, a);
+            let fast = act.time_to_switch_within(&p, a, within);
+            if full < within {
+                prop_assert_eq!(fast, full);
+            } else {
+                prop_assert!(fast >= within, "{} < {} (full {})", fast, within, full);
+            }
+        }
+    }
 
     fn act() -> SecondOrderActuator {
         SecondOrderActuator {

@@ -47,6 +47,8 @@ pub struct SampledSensor {
     normal: Option<Normal<f64>>,
     rng: rand::rngs::StdRng,
     next_index: u64,
+    /// `next_index * period_s`, s (kept: the loop asks for it several times per step).
+    next_time_s: f64,
     /// (delivery time, sequence, value)
     pending: VecDeque<(f64, u32, f32)>,
     latest: Option<(u32, f32)>,
@@ -69,6 +71,7 @@ impl SampledSensor {
                 .flatten(),
             rng: rand::rngs::StdRng::seed_from_u64(seed),
             next_index: 0,
+            next_time_s: 0.0,
             pending: VecDeque::new(),
             latest: None,
         }
@@ -80,15 +83,37 @@ impl SampledSensor {
             z += n.sample(&mut self.rng);
         }
         if self.quantization_m > 0.0 {
-            z = (z / self.quantization_m).round() * self.quantization_m;
+            z = round_half_away(z / self.quantization_m) * self.quantization_m;
         }
         z as f32
     }
 }
 
+/// `x.round()` (half away from zero, the sign of zero kept), bit for bit, without the
+/// library call `f64::round` becomes on x86-64's baseline (no SSE4.1 `roundsd`): the
+/// truncation `x as i64` is one instruction and `x - t` is exact. Values of magnitude
+/// 2^52 and more are integers already (and NaN and infinities are returned as they are).
+#[inline]
+pub fn round_half_away(x: f64) -> f64 {
+    const INTEGRAL: f64 = 4_503_599_627_370_496.0; // 2^52
+    if x.is_nan() || x.abs() >= INTEGRAL {
+        return x;
+    }
+    let t = x as i64 as f64;
+    let r = if x - t >= 0.5 {
+        t + 1.0
+    } else if x - t <= -0.5 {
+        t - 1.0
+    } else {
+        t
+    };
+    r.copysign(x)
+}
+
 impl Sensor for SampledSensor {
+    #[inline]
     fn next_sample_time_s(&self) -> f64 {
-        self.next_index as f64 * self.period_s
+        self.next_time_s
     }
 
     fn sample(&mut self, t_s: f64, height_m: f64) {
@@ -99,6 +124,7 @@ impl Sensor for SampledSensor {
         }
         self.pending.push_back((t_s + self.latency_s, seq, z));
         self.next_index += 1;
+        self.next_time_s = self.next_index as f64 * self.period_s;
     }
 
     fn frame(&mut self, _step: u64, t_s: f64, _height_m: f64) -> (u32, f32) {
@@ -141,6 +167,50 @@ mod tests {
         let (seq, z) = s.frame(1, 0.05, 0.0);
         assert_eq!(seq, 3);
         assert!((z - 0.46).abs() < 1e-6, "{z}"); // 0.456 -> 0.46
+    }
+
+    #[test]
+    fn rounding_matches_the_standard_library_bit_for_bit() {
+        let special = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            -2.5,
+            0.49999999999999994,
+            -0.49999999999999994,
+            4503599627370495.5,
+            -4503599627370495.5,
+            4503599627370496.0,
+            1e300,
+            -1e300,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let draws = (0..200_000).map(|k| {
+            use rand::Rng;
+            let x: f64 = rng.random_range(-1e6..1e6);
+            match k % 4 {
+                0 => x,
+                1 => x.trunc() + 0.5,                     // exact halves
+                2 => x * 1e-7,                            // small
+                _ => f64::from_bits(rng.random::<u64>()), // any bit pattern
+            }
+        });
+        for x in special.into_iter().chain(draws) {
+            let (ours, std) = (round_half_away(x), x.round());
+            assert!(
+                ours.to_bits() == std.to_bits() || (ours.is_nan() && std.is_nan()),
+                "{x:e}: {ours:e} vs {std:e}"
+            );
+        }
+        assert!(round_half_away(f64::NAN).is_nan());
     }
 
     #[test]

@@ -33,7 +33,8 @@ pub fn eval(c0: f64, c1: f64, c2: f64, t: f64) -> f64 {
 ///   closing there (`c1 < 0`, or `c1 == 0` and `c2 < 0`), else the ball separates and the
 ///   next root, if any, is returned.
 ///
-/// Non-finite coefficients yield `None`.
+/// Non-finite coefficients yield `None`. A caller that expects most gaps to stay clear of
+/// zero can ask [`clearly_apart`] first (no square root, no division).
 pub fn first_contact(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
     if !(c0.is_finite() && c1.is_finite() && c2.is_finite() && h.is_finite()) || h < 0.0 {
         return None;
@@ -113,8 +114,44 @@ pub fn first_contact(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
     None
 }
 
+/// Where `sqrt(c1 * c1) == c1` holds exactly for `c1 > 0` (the square neither overflows
+/// nor falls below the normal range), m/s.
+const EXACT_SQUARE_MPS: (f64, f64) = (1e-150, 1e150);
+
+/// How far, relative to the size of the gap's terms over the window, a lower bound of the
+/// gap must stay above zero for [`clearly_apart`] to answer without the roots: 1e-9 is
+/// some 4.5e6 ulps, far beyond the grazing allowance ([`GRAZE_ULPS`]) and the rounding of
+/// the roots, so the shortcut never answers differently from the full computation.
+const CLEAR_GAP: f64 = 1e-9;
+
+/// True if `c0 + c1 t + c2 t^2` provably stays above zero on `[0, h]`: `c0 > 0` and each
+/// term at its lowest over the window (`c1 t >= min(0, c1 h)`, `c2 t^2 >= min(0, c2 h^2)`)
+/// still leaves a margin of `CLEAR_GAP` (1e-9) times the terms' size. Then [`first_contact`]
+/// returns `None`, and a caller may skip it: the common case of a ball well above the
+/// paddle over a short segment (a control period) costs no square root or division.
+/// In [`first_contact`] a contact needs the gap within rounding of zero somewhere in
+/// `[0, h]` (a root there, or a minimum within `GRAZE_ULPS` ulps of it), which the margin
+/// excludes. Non-finite input gives false.
+#[inline]
+pub fn clearly_apart(c0: f64, c1: f64, c2: f64, h: f64) -> bool {
+    if c0.is_nan() || c0 <= 0.0 {
+        return false;
+    }
+    let linear = c1 * h;
+    let quadratic = c2 * h * h;
+    let lower = c0 + linear.min(0.0) + quadratic.min(0.0);
+    lower > CLEAR_GAP * (c0 + linear.abs() + quadratic.abs())
+}
+
 /// The positive root of `c0 + c1 t + c2 t^2` for `c0 <= 0` tiny, `c1 > 0`, `c2 < 0`.
 fn second_root_from_touch(c0: f64, c1: f64, c2: f64) -> f64 {
+    if c0 == 0.0 && (EXACT_SQUARE_MPS.0..EXACT_SQUARE_MPS.1).contains(&c1) {
+        // a take-off from the surface (every bounce on a table or the ideal mirror): the
+        // discriminant is c1^2, whose correctly rounded square root is c1 itself in binary
+        // floating point (no overflow or underflow), so q = -c1 exactly and the square root,
+        // the longest step of the impact-to-impact chain, is not needed
+        return -c1 / c2;
+    }
     let disc = (c1 * c1 - 4.0 * c0 * c2).max(0.0);
     let q = -0.5 * (c1 + disc.sqrt());
     // roots q/c2 (the far one, positive) and c0/q (the near one, ~0)
@@ -233,6 +270,47 @@ mod tests {
                     .map(|t| eval(c0, c1, c2, t)).fold(f64::INFINITY, f64::min);
                 prop_assert!(before >= -64.0 * f64::EPSILON * mag.max(f64::MIN_POSITIVE));
             }
+        }
+
+        /// The shortcut answers as the roots do: whenever it says "clear", the full
+        /// computation finds no contact either, for gaps built to pass close to zero (a
+        /// double root at `t0` lifted by `lift`, near and beyond the window's end) as well
+        /// as arbitrary ones.
+        #[test]
+        fn the_shortcut_agrees_with_the_roots(
+            t0 in -1.0f64..3.0,
+            a in -50.0f64..50.0,
+            lift_exp in -16i32..1,
+            v in -10.0f64..10.0,
+            scale_exp in -3i32..3,
+            h in 0.0f64..2.0,
+        ) {
+            let s = 10f64.powi(scale_exp);
+            let lift = 10f64.powi(lift_exp);
+            // a (t - t0)^2 + lift, and a gap with an arbitrary slope
+            let tangent = (s * (a * t0 * t0 + lift), -2.0 * a * t0 * s, a * s);
+            let sloped = (s * lift, v * s, a * s);
+            for (c0, c1, c2) in [tangent, sloped] {
+                if clearly_apart(c0, c1, c2, h) {
+                    prop_assert_eq!(first_contact(c0, c1, c2, h), None, "{} {} {} {}", c0, c1, c2, h);
+                }
+            }
+        }
+
+        /// A take-off from the surface (c0 = 0) is answered without the square root, bit
+        /// for bit as with it (the square root of c1^2 is c1 exactly).
+        #[test]
+        fn take_off_roots_match_the_square_root(
+            mantissa in 1.0f64..2.0,
+            exp in -520i32..520,
+            a in 1e-3f64..1e3,
+            negative_zero in proptest::bool::ANY,
+        ) {
+            let c1 = mantissa * 2f64.powi(exp);
+            let c0 = if negative_zero { -0.0 } else { 0.0 };
+            let c2 = -a;
+            let q = -0.5 * (c1 + (c1 * c1 - 4.0 * c0 * c2).max(0.0).sqrt());
+            prop_assert_eq!(second_root_from_touch(c0, c1, c2).to_bits(), (q / c2).to_bits());
         }
 
         /// Tangent gaps (exact double roots, built from the root) are never missed.

@@ -65,6 +65,9 @@ pub struct LinePlant<F, S, J> {
     pub rest_count: u64,
     /// Grazing contacts (zero relative speed) so far.
     pub grazing_contacts: u64,
+    /// The last impact (meaningful once `impacts > 0`): built in place, so a caller that
+    /// wants the last row reads it here instead of copying every row it is passed.
+    pub last_row: ImpactRow,
 }
 
 /// Rest events kept in [`LinePlant::rests`].
@@ -95,6 +98,7 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
             rests: Vec::new(),
             rest_count: 0,
             grazing_contacts: 0,
+            last_row: ImpactRow::default(),
         }
     }
 
@@ -125,7 +129,7 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
             if window <= 0.0 {
                 return Advance::Reached;
             }
-            let to_switch = self.surface.max_segment_s();
+            let to_switch = self.surface.max_segment_s(window);
             let (h, hits_switch) = if to_switch < window {
                 (to_switch, true)
             } else {
@@ -151,7 +155,11 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
                 self.resting = false;
             }
             let poly = self.surface.poly();
-            match self.flight.fly(&mut self.ball, &poly, h, g) {
+            let end = match S::SHORT_SEGMENTS {
+                true => self.flight.fly_short(&mut self.ball, &poly, h, g),
+                false => self.flight.fly(&mut self.ball, &poly, h, g),
+            };
+            match end {
                 FlightEnd::Reached(dt) => {
                     let whole = dt >= h;
                     self.surface.advance(dt, whole && hits_switch);
@@ -204,7 +212,7 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
         // the ball is on the paddle surface at a contact: remove rounding in the height
         self.ball = BallState::new(paddle.height_m, v_after);
         let relative = v_after - rv;
-        let row = ImpactRow {
+        self.last_row = ImpactRow {
             index: self.impacts,
             time_s: self.time_s,
             ball_height_m: paddle.height_m,
@@ -215,7 +223,7 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
             apex_height_m: self.flight.apex_m(&self.ball, g),
         };
         self.impacts += 1;
-        on_impact(&row);
+        on_impact(&self.last_row);
         if self.zeno.is_zeno(relative, rv) {
             // the bounces that follow are a geometric series: sum them in closed form
             // against the surface's current acceleration, then rest on the paddle

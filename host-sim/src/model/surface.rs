@@ -11,8 +11,9 @@ pub trait Surface {
     /// The surface over the coming segment as a quadratic in local time (for contact roots).
     fn poly(&self) -> Poly;
     /// How long [`poly`](Surface::poly) stays valid on its own (until a limit switches the
-    /// regime), s.
-    fn max_segment_s(&self) -> f64;
+    /// regime), s: exact when shorter than `within_s` (the segment the caller wants), else
+    /// any value `>= within_s` (the regime outlasts the segment: no need to know by how much).
+    fn max_segment_s(&self, within_s: f64) -> f64;
     /// Move along the current polynomial by `dt_s`; `to_switch` if that reaches the end of
     /// [`max_segment_s`](Surface::max_segment_s).
     fn advance(&mut self, dt_s: f64, to_switch: bool);
@@ -25,6 +26,10 @@ pub trait Surface {
     fn command(&mut self, accel_mps2: f64);
     /// True if a ball resting on this surface rests forever (nothing will throw it).
     fn rest_is_final(&self) -> bool;
+    /// True if the plant's segments on this surface are short (a control period) and
+    /// mostly end without a contact: the plant then asks the flight model to rule a
+    /// contact out cheaply first ([`crate::engine::Flight::fly_short`]).
+    const SHORT_SEGMENTS: bool = false;
 }
 
 /// A fixed, horizontal table.
@@ -44,7 +49,7 @@ impl Surface for Table {
         }
     }
     #[inline]
-    fn max_segment_s(&self) -> f64 {
+    fn max_segment_s(&self, _: f64) -> f64 {
         f64::INFINITY
     }
     #[inline]
@@ -78,7 +83,7 @@ impl Surface for IdealMirror {
         Poly::default()
     }
     #[inline]
-    fn max_segment_s(&self) -> f64 {
+    fn max_segment_s(&self, _: f64) -> f64 {
         f64::INFINITY
     }
     #[inline]
@@ -125,6 +130,8 @@ impl<A: Actuator> Actuated<A> {
 }
 
 impl<A: Actuator> Surface for Actuated<A> {
+    const SHORT_SEGMENTS: bool = true;
+
     #[inline]
     fn poly(&self) -> Poly {
         Poly {
@@ -134,8 +141,9 @@ impl<A: Actuator> Surface for Actuated<A> {
         }
     }
     #[inline]
-    fn max_segment_s(&self) -> f64 {
-        self.actuator.time_to_switch(&self.paddle, self.accel_mps2)
+    fn max_segment_s(&self, within_s: f64) -> f64 {
+        self.actuator
+            .time_to_switch_within(&self.paddle, self.accel_mps2, within_s)
     }
     #[inline]
     fn advance(&mut self, dt: f64, to_switch: bool) {

@@ -131,14 +131,21 @@ fn with_sensor<F: Flight, S: Surface, J: Jitter>(
     rec: &mut Recorder,
     plant: LinePlant<F, S, J>,
 ) -> Result<(), RunError> {
-    let mut own;
-    let ctrl: &mut dyn StepController = match c {
-        Some(c) => c,
-        None => {
-            own = Sil::new(s.controller_params()?)?;
-            &mut own
-        }
-    };
+    match c {
+        Some(c) => sensed(s, o, c, rec, plant),
+        None => sensed(s, o, &mut Sil::new(s.controller_params()?)?, rec, plant),
+    }
+}
+
+/// The stepped run of `plant` with the sensor of `s`, closed through `ctrl` (the core
+/// linked in, or a controller behind a link).
+fn sensed<F: Flight, S: Surface, J: Jitter, C: StepController + ?Sized>(
+    s: &Scene,
+    o: &RunOptions,
+    ctrl: &mut C,
+    rec: &mut Recorder,
+    plant: LinePlant<F, S, J>,
+) -> Result<(), RunError> {
     match &s.sensor {
         None => stepped_run(s, o, ctrl, plant, PerfectSensor, rec),
         Some(x) => {

@@ -44,6 +44,7 @@ fn finish<F: Flight, S: Surface, J: Jitter>(
     out.resting_at_end = plant.resting;
     out.grazing_contacts = plant.grazing_contacts;
     out.final_ball = plant.ball;
+    out.last_row = (plant.impacts > 0).then_some(plant.last_row);
 }
 
 /// Impact-to-impact run without a controller (table, ideal mirror): to the impact limit,
@@ -170,15 +171,20 @@ fn samples_per_period(s: &Scene) -> u64 {
 
 /// Fixed-rate run: a sensor frame at every control step, the command held for the period;
 /// to the impact limit or the time limit (every period is simulated whole). The
-/// controller is stepped through [`Counted`], which counts its safe-state steps.
-pub(super) fn stepped_run<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
+/// controller is stepped through [`Counted`], which counts its safe-state steps; `C` is
+/// [`crate::controller::Sil`] for the core linked in (monomorphized: no dynamic call, no
+/// telemetry built) or a `dyn StepController` (the firmware in QEMU or on a board).
+pub(super) fn stepped_run<F: Flight, S: Surface, J: Jitter, Z: Sensor, C>(
     s: &Scene,
     o: &RunOptions,
-    ctrl: &mut dyn StepController,
+    ctrl: &mut C,
     mut plant: LinePlant<F, S, J>,
     mut sensor: Z,
     rec: &mut Recorder,
-) -> Result<(), RunError> {
+) -> Result<(), RunError>
+where
+    C: StepController + ?Sized,
+{
     let start = Instant::now();
     let mut ctrl = Counted::new(ctrl);
     let dt = 1.0 / s.control.rate_hz;
@@ -194,10 +200,8 @@ pub(super) fn stepped_run<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
             break;
         }
         let frame = frame(&plant, &mut sensor, k, k as f64 * dt);
-        let step = ctrl.step(&frame)?;
-        plant
-            .surface
-            .command(f64::from(step.command.paddle_accel_mps2));
+        let command = ctrl.command(&frame)?;
+        plant.surface.command(f64::from(command.paddle_accel_mps2));
         let phase = &mut rec.out.phase;
         if o.record_phase && k % phase_every == 0 && phase.len() < MAX_PHASE_SAMPLES {
             phase.push((plant.ball.height_m, plant.ball.velocity_mps));

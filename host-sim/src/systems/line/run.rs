@@ -152,10 +152,9 @@ pub(super) struct Recorder<'a> {
 }
 
 impl Recorder<'_> {
-    #[inline]
+    #[inline(always)]
     pub(super) fn push(&mut self, row: &ImpactRow) {
         self.out.apexes.push(row.apex_height_m);
-        self.out.last_row = Some(*row);
         if self.keep_rows {
             self.out.rows.push(*row);
             self.out.apexes_m.push(row.apex_height_m);
