@@ -420,4 +420,50 @@ mod tests {
         let t = impact_target::<PolySinCos>(&law, &tilt, &lim(), &far);
         assert!(t.clamped && t.alpha_rad == 0.7);
     }
+    #[test]
+    fn a_stroke_at_its_speed_limit_gives_the_normal_velocity_of_the_clamped_pivot() {
+        let law = LawConstants {
+            kappa: 1.1,
+            kappa_rate_s: 0.0,
+            kappa_e_s2pm2: 0.165,
+            target_energy_jpkg: 9.81 * 0.25,
+            compensation: 1.0 / 3.0,
+            gravity_mps2: 9.81,
+            l_m: 0.133_33,
+            impact_height_m: 0.0,
+        };
+        let tilt = AxisLimits {
+            min: -0.7,
+            max: 0.7,
+            velocity_max: 8.0,
+            accel_max: 300.0,
+        };
+        // a slow stroke (0.2 m/s) against a fast fall: eq. 25 asks for more
+        let stroke = AxisLimits {
+            velocity_max: 0.2,
+            ..lim()
+        };
+        let th = 0.25f32;
+        let b = BodyAtImpact {
+            theta_rad: th,
+            sin_theta: th.sin(),
+            cos_theta: th.cos(),
+            x_dot_mps: 0.6,
+            y_dot_mps: -3.0,
+            theta_dot_radps: 1.1,
+        };
+        let free = impact_target::<PolySinCos>(&law, &tilt, &lim(), &b);
+        assert!(!free.clamped && free.velocity_mps.abs() > 0.2);
+        let t = impact_target::<PolySinCos>(&law, &tilt, &stroke, &b);
+        assert!(t.clamped, "a stroke at its speed limit is a clamped target");
+        assert_eq!(t.velocity_mps.abs(), 0.2);
+        assert_eq!(t.velocity_mps.signum(), free.velocity_mps.signum());
+        // the surface's normal n = (-sin a, cos a) against the pivot's velocity (x', h')
+        let a = f64::from(t.alpha_rad);
+        let vn = -a.sin() * 0.6 + a.cos() * f64::from(t.velocity_mps);
+        assert!((f64::from(t.normal_velocity_mps) - vn).abs() < 1e-6);
+        assert!(
+            (f64::from(t.normal_velocity_mps) - f64::from(free.normal_velocity_mps)).abs() > 0.05
+        );
+    }
 }
