@@ -161,3 +161,25 @@ fn bit_identical_tells_every_field_apart_to_the_bit() {
     };
     assert!(!zero.bit_identical(&negative_zero));
 }
+
+#[test]
+fn non_finite_travel_ends_and_a_zero_stale_limit_are_refused_by_name() {
+    let d = TiltParams::default();
+    let mut p = d;
+    p.stroke.min_m = f32::NAN;
+    assert_eq!(p.validate(), Err(ParamError::NotFinite("stroke.min_m")));
+    let mut p = d;
+    p.stroke.max_m = f32::INFINITY;
+    assert_eq!(p.validate(), Err(ParamError::NotFinite("stroke.max_m")));
+    let mut p = d;
+    p.y_min_m = f32::NEG_INFINITY;
+    assert_eq!(p.validate(), Err(ParamError::NotFinite("y_min_m")));
+    let p = TiltParams {
+        stale_limit_steps: 0,
+        ..d
+    };
+    assert_eq!(
+        p.validate(),
+        Err(ParamError::NotPositive("stale_limit_steps"))
+    );
+}
