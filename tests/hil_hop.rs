@@ -15,28 +15,20 @@ use dexter_core::hop::{EnergyServoThrust, RaibertThrust};
 use dexter_core::hop_control::HopController;
 use dexter_core::protocol::RunSummary;
 use dexter_sim::controller::HilReport;
-use dexter_sim::hil::{self, HilOptions, LinkKind, LockStep, StepBudget};
+use dexter_sim::hil::{HilOptions, LinkKind, LockStep, StepBudget};
 use dexter_sim::model::hopper::sampled::{
     run_sampled, run_sil, DetectorOptions, SampledConfig, SampledEnd, SampledRun, SensorConfig,
     TimelineWindow,
 };
 use dexter_sim::model::hopper::valve::ValveModel;
 use dexter_sim::model::hopper::{LinearSpring, ThrustLaw};
+use dexter_tests::{firmware, static_worst_case};
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 use std::time::Duration;
 
 const G: f64 = 9.81;
 /// The hopper controller's own budget (300 instructions).
 const HOP_BUDGET: u32 = <HopController as FixedRate>::STEP_INSTRUCTION_BUDGET;
-
-/// Build the firmware once for all tests of this binary (or fail saying what is missing).
-fn firmware() -> PathBuf {
-    static ELF: OnceLock<Result<PathBuf, String>> = OnceLock::new();
-    ELF.get_or_init(|| hil::build_firmware().map_err(|e| e.to_string()))
-        .clone()
-        .unwrap_or_else(|e| panic!("HIL tests need the firmware: {e}"))
-}
 
 /// Tuned linear model (eq. 16 in eq. 10's coordinates): Table 1's eta1 and gamma (figs.
 /// 8, 10), touchdown at 0.5 m.
@@ -171,39 +163,6 @@ fn energy_servo_with_a_noisy_sensor_in_hil_equals_sil_bit_for_bit() {
 }
 
 // ---- the static bound -------------------------------------------------------------------
-
-/// The static worst case of a step function of `elf` (scripts/wcet.py --json):
-/// (instructions, Cortex-M4 cycles).
-fn static_worst_case(elf: &Path, symbol: &str) -> (u32, u32) {
-    let root = hil::workspace_root();
-    let out = std::process::Command::new("python3")
-        .arg(root.join("scripts/wcet.py"))
-        .arg(elf)
-        .arg(symbol)
-        .arg("--json")
-        .output()
-        .unwrap_or_else(|e| panic!("run python3 scripts/wcet.py (install Python 3): {e}"));
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "scripts/wcet.py failed on {symbol}: {}{}",
-        text,
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let field = |key: &str| -> u32 {
-        let at = text
-            .find(key)
-            .unwrap_or_else(|| panic!("no {key} in {text}"))
-            + key.len();
-        text[at..]
-            .trim_start_matches(['"', ':', ' '])
-            .split(|c: char| !c.is_ascii_digit())
-            .next()
-            .and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("{key} in {text}"))
-    };
-    (field("\"worst_instructions\""), field("\"worst_cycles\""))
-}
 
 /// The hopper step's budget holds for every accepted configuration: its compiled code has
 /// no loop and no call, so its longest path (scripts/wcet.py) bounds every step; within

@@ -23,20 +23,12 @@ use dexter_sim::model::planar::real_table::{
 };
 use dexter_sim::model::planar::table_run::{TableRun, TableRunEnd};
 use dexter_sim::model::planar::PlanarParams;
+use dexter_tests::{firmware, static_worst_case};
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 use std::time::Duration;
 
 /// The tilt controller's own budget (600 instructions).
 const TILT_BUDGET: u32 = <TiltController as FixedRate>::STEP_INSTRUCTION_BUDGET;
-
-/// Build the firmware once for all tests of this binary (or fail saying what is missing).
-fn firmware() -> PathBuf {
-    static ELF: OnceLock<Result<PathBuf, String>> = OnceLock::new();
-    ELF.get_or_init(|| hil::build_firmware().map_err(|e| e.to_string()))
-        .clone()
-        .unwrap_or_else(|e| panic!("HIL tests need the firmware: {e}"))
-}
 
 fn options(elf: &Path, budget: StepBudget) -> HilOptions {
     HilOptions {
@@ -158,41 +150,6 @@ fn realistic_triangle_in_hil_stays_upright_and_equals_sil_bit_for_bit() {
 }
 
 // ---- the static bound -------------------------------------------------------------------
-
-/// The static worst case of a step function of the firmware image `elf` (scripts/wcet.py:
-/// the longest path through its compiled code, callees included; the function has no loop
-/// and no indirect call, so the bound holds for every input and every configuration the
-/// validator accepts): (instructions, Cortex-M4 cycles).
-fn static_worst_case(elf: &Path, symbol: &str) -> (u32, u32) {
-    let root = hil::workspace_root();
-    let out = std::process::Command::new("python3")
-        .arg(root.join("scripts/wcet.py"))
-        .arg(elf)
-        .arg(symbol)
-        .arg("--json")
-        .output()
-        .unwrap_or_else(|e| panic!("run python3 scripts/wcet.py (install Python 3): {e}"));
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "scripts/wcet.py failed on {symbol}: {}{}",
-        text,
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let field = |key: &str| -> u32 {
-        let at = text
-            .find(key)
-            .unwrap_or_else(|| panic!("no {key} in {text}"))
-            + key.len();
-        text[at..]
-            .trim_start_matches(['"', ':', ' '])
-            .split(|c: char| !c.is_ascii_digit())
-            .next()
-            .and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("{key} in {text}"))
-    };
-    (field("\"worst_instructions\""), field("\"worst_cycles\""))
-}
 
 /// The tilt step's instruction budget holds for every accepted configuration: the longest
 /// path through `TiltControllerWith<PolySinCos>::step` as compiled into the shipped image
