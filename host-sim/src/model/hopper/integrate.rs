@@ -61,6 +61,29 @@ impl Integrator {
 /// (chi, chi').
 pub type State = (f64, f64);
 
+impl Integrator {
+    /// The first step size, s, and the error tolerance, m (0 for fixed steps).
+    fn first_step_and_tolerance(self) -> (f64, f64) {
+        match self {
+            Integrator::Rk4 { step_s } => (step_s, 0.0),
+            Integrator::Rk45 {
+                tolerance_m,
+                initial_step_s,
+            } => (initial_step_s, tolerance_m),
+        }
+    }
+}
+
+/// One step of size `h`: Dormand-Prince 5(4) with its error estimate if `adaptive`, else
+/// RK4 with error 0.
+fn one_step(adaptive: bool, a: &impl Fn(State) -> f64, y: State, h: f64) -> (State, f64) {
+    if adaptive {
+        dp45_step(a, y, h)
+    } else {
+        (rk4_step(a, y, h), 0.0)
+    }
+}
+
 fn rk4_step(a: &impl Fn(State) -> f64, y: State, h: f64) -> State {
     let k1 = (y.1, a(y));
     let y2 = (y.0 + 0.5 * h * k1.0, y.1 + 0.5 * h * k1.1);
@@ -169,21 +192,9 @@ pub fn integrate_to_event(
     let mut y = y0;
     let mut t = 0.0;
     let mut steps = 0u64;
-    let (mut h, tol) = match method {
-        Integrator::Rk4 { step_s } => (step_s, 0.0),
-        Integrator::Rk45 {
-            tolerance_m,
-            initial_step_s,
-        } => (initial_step_s, tolerance_m),
-    };
+    let (mut h, tol) = method.first_step_and_tolerance();
     let adaptive = matches!(method, Integrator::Rk45 { .. });
-    let step = |y: State, h: f64| -> (State, f64) {
-        if adaptive {
-            dp45_step(a, y, h)
-        } else {
-            (rk4_step(a, y, h), 0.0)
-        }
-    };
+    let step = |y: State, h: f64| one_step(adaptive, a, y, h);
     while steps < MAX_STEPS_PER_PHASE {
         let mut hs = h;
         let mut y1;
@@ -277,21 +288,9 @@ pub fn integrate_span(
     events: &[&dyn Fn(State) -> f64],
 ) -> (SpanOutcome, u64) {
     let fired = |y: State| events.iter().position(|e| e(y) >= 0.0);
-    let (mut h, tol) = match method {
-        Integrator::Rk4 { step_s } => (step_s, 0.0),
-        Integrator::Rk45 {
-            tolerance_m,
-            initial_step_s,
-        } => (initial_step_s, tolerance_m),
-    };
+    let (mut h, tol) = method.first_step_and_tolerance();
     let adaptive = matches!(method, Integrator::Rk45 { .. });
-    let step = |y: State, h: f64| -> (State, f64) {
-        if adaptive {
-            dp45_step(a, y, h)
-        } else {
-            (rk4_step(a, y, h), 0.0)
-        }
-    };
+    let step = |y: State, h: f64| one_step(adaptive, a, y, h);
     let (mut y, mut t, mut steps) = (y0, 0.0, 0u64);
     while t < span_s {
         if steps >= MAX_STEPS_PER_PHASE {
