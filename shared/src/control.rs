@@ -17,6 +17,7 @@
 
 use crate::estimate::{BallEstimator, Estimate, EstimatorParams};
 use crate::fixed_rate::FixedRate;
+use crate::math::Real;
 use crate::mirror::{MirrorLaw, PaddleReference};
 use crate::params::{finite, positive, within, ParamError};
 use crate::protocol::{ActuatorCommand, Fault, Mode, SensorFrame, Telemetry};
@@ -138,12 +139,15 @@ struct PlausiblePaddle {
 }
 
 impl PlausiblePaddle {
+    /// Saturated at the largest finite `f32`s, so the bounds are finite for any valid
+    /// limits (however large): [`Controller::check`] relies on a non-finite measurement
+    /// failing them.
     fn new(l: &PaddleLimits) -> Self {
         let travel_margin_m = 0.05 * (l.max_height_m - l.min_height_m);
         Self {
-            min_height_m: l.min_height_m - travel_margin_m,
-            max_height_m: l.max_height_m + travel_margin_m,
-            max_speed_mps: 2.0 * l.velocity_max_mps,
+            min_height_m: (l.min_height_m - travel_margin_m).max_r(f32::MIN),
+            max_height_m: (l.max_height_m + travel_margin_m).min_r(f32::MAX),
+            max_speed_mps: (2.0 * l.velocity_max_mps).min_r(f32::MAX),
         }
     }
 }
@@ -207,11 +211,16 @@ impl Controller {
             Ok(fresh) => {
                 let paddle = PaddleState::new(frame.paddle_height_m, frame.paddle_velocity_mps);
                 self.paddle = paddle;
-                self.estimate = if fresh {
+                let estimate = if fresh {
                     self.estimator.update(frame.ball_height_m, &paddle)
                 } else {
                     self.estimator.coast(&paddle)
                 };
+                // Field by field: a whole-struct copy stored the two flags as bytes and
+                // read them back as one word, a store-forwarding stall on every step.
+                self.estimate.ball = estimate.ball;
+                self.estimate.valid = estimate.valid;
+                self.estimate.impact = estimate.impact;
                 let (reference, mode) = if self.estimate.valid {
                     let r = self
                         .tracker
@@ -261,23 +270,27 @@ impl Controller {
     /// Validate a frame; `Ok(true)` if it carries a new sample, `Ok(false)` if it repeats
     /// the last one (within the stale limit).
     fn check(&mut self, frame: &SensorFrame) -> Result<bool, Fault> {
-        let values = [
-            frame.ball_height_m,
-            frame.paddle_height_m,
-            frame.paddle_velocity_mps,
-        ];
-        if values.iter().any(|v| !v.is_finite()) {
-            return Err(Fault::NonFinite);
-        }
         let p = &self.params;
         let q = &self.plausible;
         let ball_range = p.ball_height_min_m..=p.ball_height_max_m;
         let paddle_range = q.min_height_m..=q.max_height_m;
-        if !ball_range.contains(&frame.ball_height_m)
-            || !paddle_range.contains(&frame.paddle_height_m)
-            || frame.paddle_velocity_mps.abs() > q.max_speed_mps
+        // NaN fails every comparison, so one pass of range checks also rejects every
+        // non-finite frame (the bounds are finite); only a rejected frame pays for telling
+        // the two faults apart
+        if !(ball_range.contains(&frame.ball_height_m)
+            && paddle_range.contains(&frame.paddle_height_m)
+            && frame.paddle_velocity_mps.abs() <= q.max_speed_mps)
         {
-            return Err(Fault::OutOfRange);
+            let values = [
+                frame.ball_height_m,
+                frame.paddle_height_m,
+                frame.paddle_velocity_mps,
+            ];
+            return Err(if values.iter().any(|v| !v.is_finite()) {
+                Fault::NonFinite
+            } else {
+                Fault::OutOfRange
+            });
         }
         // a sample is new if its sequence number moved forward (wrapping arithmetic)
         let fresh = match self.last_seq {
@@ -376,6 +389,42 @@ mod tests {
         assert_eq!(c.step(&f).fault, Fault::NonFinite);
         // recovers on valid input
         assert_eq!(c.step(&frame(3, 0.5)).fault, Fault::None);
+    }
+
+    /// Every non-finite field is `NonFinite`, also with limits so large that the plausible
+    /// range (the travel widened by 5 %, twice the speed limit) exceeds `f32` and must
+    /// saturate: the step's single pass of range checks relies on finite bounds.
+    #[test]
+    fn non_finite_fields_are_refused_even_with_the_largest_limits() {
+        let mut huge = ControllerParams::default();
+        huge.limits.min_height_m = -f32::MAX;
+        huge.limits.max_height_m = f32::MAX;
+        huge.limits.velocity_max_mps = f32::MAX;
+        huge.home_height_m = 0.0;
+        for params in [ControllerParams::default(), huge] {
+            let mut c = Controller::new(params).unwrap();
+            for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                for field in 0..3 {
+                    let mut f = frame(0, 0.5);
+                    match field {
+                        0 => f.ball_height_m = bad,
+                        1 => f.paddle_height_m = bad,
+                        _ => f.paddle_velocity_mps = bad,
+                    }
+                    let cmd = c.step(&f);
+                    assert_eq!(cmd.fault, Fault::NonFinite, "field {field} = {bad}");
+                }
+            }
+            // a finite measurement far out of range is the other fault
+            let mut f = frame(0, 0.5);
+            f.paddle_height_m = 1e3;
+            let want = if params.limits.max_height_m > 1e3 {
+                Fault::None
+            } else {
+                Fault::OutOfRange
+            };
+            assert_eq!(c.step(&f).fault, want);
+        }
     }
 
     #[test]
