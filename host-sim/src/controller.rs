@@ -157,12 +157,22 @@ pub fn fault_name(f: Fault) -> &'static str {
 
 impl SafeSteps {
     /// Count one command.
+    #[inline]
     pub fn record(&mut self, command: &impl Reply) {
         self.steps += 1;
         if command.mode() == Mode::Safe {
-            self.safe_steps += 1;
-            *self.faults.entry(fault_name(command.fault())).or_insert(0) += 1;
+            self.record_safe(command.fault());
         }
+    }
+
+    /// Out of line, so the Track path reads only the mode byte (loading mode and fault
+    /// together as one word, right after the controller stored them as two bytes, stalled
+    /// the store-to-load forwarding of every SIL step).
+    #[cold]
+    #[inline(never)]
+    fn record_safe(&mut self, fault: Fault) {
+        self.safe_steps += 1;
+        *self.faults.entry(fault_name(fault)).or_insert(0) += 1;
     }
 
     /// True if the controller answered more than half of its steps in the safe state (the

@@ -80,6 +80,16 @@ impl SecondOrderActuator {
         travel_m * (1.0 + STOP_CLEARANCE) < room_m * (1.0 - STOP_CLEARANCE)
     }
 
+    /// True if the paddle at `p` with acceleration `a` cannot reach the speed limit within
+    /// `horizon_s` (s): its largest speed `|v| + |a| t` stays short of the limit by the
+    /// same margin as [`stops_out_of_reach`](Self::stops_out_of_reach). False for an
+    /// infinite horizon or non-finite input (the division decides).
+    #[inline]
+    fn speed_limit_out_of_reach(&self, p: &PaddleState<f64>, a: f64, horizon_s: f64) -> bool {
+        let top_mps = p.velocity_mps.abs() + a.abs() * horizon_s;
+        top_mps * (1.0 + STOP_CLEARANCE) < self.velocity_max_mps * (1.0 - STOP_CLEARANCE)
+    }
+
     /// Time until the speed limit ends acceleration `a` from `p`, s (infinite if never).
     #[inline]
     fn time_to_speed_limit(&self, p: &PaddleState<f64>, a: f64) -> f64 {
@@ -141,7 +151,13 @@ impl Actuator for SecondOrderActuator {
         self.time_to_stop_or(p, a, self.time_to_speed_limit(p, a))
     }
 
+    #[inline(always)]
     fn time_to_switch_within(&self, p: &PaddleState<f64>, a: f64, within_s: f64) -> f64 {
+        if self.speed_limit_out_of_reach(p, a, within_s) && self.stops_out_of_reach(p, a, within_s)
+        {
+            // no limit within the segment: skip the division and the roots
+            return f64::INFINITY;
+        }
         let t = self.time_to_speed_limit(p, a);
         if self.stops_out_of_reach(p, a, t.min(within_s)) {
             // the speed limit (or nothing) ends the regime, or it outlasts the segment

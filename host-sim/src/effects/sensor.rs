@@ -8,7 +8,6 @@
 
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
-use std::collections::VecDeque;
 
 /// A ball sensor: sample events inside the plant, frames at control steps.
 pub trait Sensor {
@@ -44,19 +43,50 @@ pub struct SampledSensor {
     period_s: f64,
     latency_s: f64,
     quantization_m: f64,
+    /// `1 / quantization_m`, 1/m (0 without quantization): the quantizer multiplies
+    /// instead of dividing on every sample (a division was a tenth of the SIL loop's time).
+    /// The level boundaries then sit within an ulp of the exact half-multiples of the step.
+    per_quantum: f64,
     normal: Option<Normal<f64>>,
     rng: rand::rngs::StdRng,
     next_index: u64,
     /// `next_index * period_s`, s (kept: the loop asks for it several times per step).
     next_time_s: f64,
-    /// (delivery time, sequence, value)
-    pending: VecDeque<(f64, u32, f32)>,
+    /// Samples taken and not yet delivered, (delivery time s, value m), sample `j` in slot
+    /// `j & mask`: a ring sized once for the latency (a power of two), so a step's push and
+    /// delivery are an index and a mask (a `VecDeque` cost ~40 instructions a step).
+    pending: Box<[(f64, f32)]>,
+    mask: u64,
+    /// Index of the oldest undelivered sample (`next_index` if none).
+    delivered: u64,
     latest: Option<(u32, f32)>,
+}
+
+/// The time of step or sample `index` at period `period_s`, s: `index as f64 * period_s`
+/// exactly (an index below 2^63 converts through `i64` to the same `f64`), in one
+/// instruction on x86-64 where a `u64` conversion takes seven.
+#[inline]
+pub fn index_time_s(index: u64, period_s: f64) -> f64 {
+    debug_assert!(index < 1 << 63);
+    index as i64 as f64 * period_s
 }
 
 /// Most samples in flight (taken, not yet delivered): the validator refuses a
 /// `sensor.latency_s` x `sensor.rate_hz` above it, so none is ever dropped.
 pub const MAX_PENDING: usize = 4096;
+
+/// Ring slots for samples `latency_s` old at `rate_hz`: a power of two holding at least
+/// twice the samples in flight plus a few (at most [`MAX_PENDING`]).
+fn ring_slots(latency_s: f64, rate_hz: f64) -> usize {
+    let in_flight = (latency_s * rate_hz).ceil();
+    if in_flight.is_finite() && in_flight >= 0.0 && in_flight < MAX_PENDING as f64 {
+        (2 * in_flight as usize + 8)
+            .next_power_of_two()
+            .min(MAX_PENDING)
+    } else {
+        MAX_PENDING
+    }
+}
 
 impl SampledSensor {
     /// A sensor sampling at `rate_hz` (> 0) with noise `sigma_m` (m), latency `latency_s`
@@ -66,15 +96,26 @@ impl SampledSensor {
             period_s: 1.0 / rate_hz,
             latency_s,
             quantization_m,
+            per_quantum: if quantization_m > 0.0 {
+                1.0 / quantization_m
+            } else {
+                0.0
+            },
             normal: (sigma_m > 0.0)
                 .then(|| Normal::new(0.0, sigma_m).ok())
                 .flatten(),
             rng: rand::rngs::StdRng::seed_from_u64(seed),
             next_index: 0,
             next_time_s: 0.0,
-            pending: VecDeque::new(),
+            pending: vec![(0.0, 0.0); ring_slots(latency_s, rate_hz)].into_boxed_slice(),
+            mask: ring_slots(latency_s, rate_hz) as u64 - 1,
+            delivered: 0,
             latest: None,
         }
+    }
+
+    fn slot(&self, index: u64) -> (f64, f32) {
+        self.pending[(index & self.mask) as usize]
     }
 
     fn measure(&mut self, height_m: f64) -> f32 {
@@ -83,7 +124,7 @@ impl SampledSensor {
             z += n.sample(&mut self.rng);
         }
         if self.quantization_m > 0.0 {
-            z = round_half_away(z / self.quantization_m) * self.quantization_m;
+            z = round_half_away(z * self.per_quantum) * self.quantization_m;
         }
         z as f32
     }
@@ -99,15 +140,14 @@ pub fn round_half_away(x: f64) -> f64 {
     if x.is_nan() || x.abs() >= INTEGRAL {
         return x;
     }
-    let t = x as i64 as f64;
-    let r = if x - t >= 0.5 {
-        t + 1.0
-    } else if x - t <= -0.5 {
-        t - 1.0
-    } else {
-        t
-    };
-    r.copysign(x)
+    // Integer arithmetic instead of branches: whether the fraction reaches one half is as
+    // random as the sensor noise, so a branch on it is mispredicted half the time (it was
+    // the costliest line of the SIL loop, `BENCHMARKS.md`). The result is the same: every
+    // integer of magnitude below 2^53 converts exactly.
+    let t = x as i64;
+    let fraction = x - t as f64;
+    let step = i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5);
+    ((t + step) as f64).copysign(x)
 }
 
 impl Sensor for SampledSensor {
@@ -118,31 +158,30 @@ impl Sensor for SampledSensor {
 
     fn sample(&mut self, t_s: f64, height_m: f64) {
         let z = self.measure(height_m);
-        let seq = self.next_index as u32;
-        if self.pending.len() >= MAX_PENDING {
-            self.pending.pop_front();
+        if self.next_index - self.delivered > self.mask {
+            self.delivered += 1; // full (never, for a validated scene): drop the oldest
         }
-        self.pending.push_back((t_s + self.latency_s, seq, z));
+        self.pending[(self.next_index & self.mask) as usize] = (t_s + self.latency_s, z);
         self.next_index += 1;
-        self.next_time_s = self.next_index as f64 * self.period_s;
+        self.next_time_s = index_time_s(self.next_index, self.period_s);
     }
 
     fn frame(&mut self, _step: u64, t_s: f64, _height_m: f64) -> (u32, f32) {
         // deliver everything due by now (1e-9 s of slack for the rounding of t)
-        while let Some(&(due, seq, z)) = self.pending.front() {
-            if due <= t_s + 1e-9 {
-                self.latest = Some((seq, z));
-                self.pending.pop_front();
-            } else {
+        while self.delivered < self.next_index {
+            let (due, z) = self.slot(self.delivered);
+            if due > t_s + 1e-9 {
                 break;
             }
+            self.latest = Some((self.delivered as u32, z));
+            self.delivered += 1;
         }
         match self.latest {
             Some(l) => l,
-            None => self
-                .pending
-                .front()
-                .map_or((0, f32::NAN), |&(_, s, z)| (s, z)),
+            None if self.delivered < self.next_index => {
+                (self.delivered as u32, self.slot(self.delivered).1)
+            }
+            None => (0, f32::NAN),
         }
     }
 }
@@ -211,6 +250,32 @@ mod tests {
             );
         }
         assert!(round_half_away(f64::NAN).is_nan());
+    }
+
+    /// Quantizing by multiplying with the reciprocal of the step gives the level that
+    /// dividing by the step gives, except within a few ulps of a half-level (where the two
+    /// roundings of the quotient may straddle it), for steps that are not powers of two.
+    #[test]
+    fn quantizing_by_the_reciprocal_matches_dividing() {
+        use rand::Rng;
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let mut near_half = 0;
+        for q in [1e-4, 1e-3, 3e-4, 0.01, 7.3e-5] {
+            let s = SampledSensor::new(1000.0, 0.0, 0.0, q, 1);
+            for _ in 0..20_000 {
+                let z: f64 = rng.random_range(-2.0..2.0);
+                let exact = z / q;
+                let got = round_half_away(z * s.per_quantum) * q;
+                let want = round_half_away(exact) * q;
+                if (exact.abs().fract() - 0.5).abs() < 1e-12 * exact.abs().max(1.0) {
+                    near_half += 1;
+                    assert!((got - want).abs() <= q * (1.0 + 1e-12), "{z} / {q}");
+                } else {
+                    assert_eq!(got.to_bits(), want.to_bits(), "{z} / {q}");
+                }
+            }
+        }
+        assert!(near_half < 10, "{near_half}");
     }
 
     #[test]

@@ -116,6 +116,7 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
 
     /// Advance to `t_end_s` (s), stopping early once `max_impacts` impacts have happened in
     /// total; each impact is passed to `on_impact`.
+    #[inline(always)]
     pub fn advance_to(
         &mut self,
         t_end_s: f64,
@@ -144,11 +145,11 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
                     self.surface.advance(h, hits_switch);
                     let p = self.surface.state(&self.ball);
                     self.ball = BallState::new(p.height_m, p.velocity_mps);
-                    self.time_s = if hits_switch {
-                        self.time_s + h
-                    } else {
-                        t_end_s
-                    };
+                    if !hits_switch {
+                        self.time_s = t_end_s;
+                        return Advance::Reached;
+                    }
+                    self.time_s += h;
                     continue;
                 }
                 // the paddle accelerates down faster than gravity: the ball leaves it
@@ -163,11 +164,13 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
                 FlightEnd::Reached(dt) => {
                     let whole = dt >= h;
                     self.surface.advance(dt, whole && hits_switch);
-                    self.time_s = if whole && !hits_switch {
-                        t_end_s
-                    } else {
-                        self.time_s + dt
-                    };
+                    if whole && !hits_switch {
+                        // the end: return now rather than on the next pass (whose window
+                        // would be 0), which cost the SIL loop a pass of setup per step
+                        self.time_s = t_end_s;
+                        return Advance::Reached;
+                    }
+                    self.time_s += dt;
                 }
                 FlightEnd::Contact { dt_s, grazing } => {
                     self.surface.advance(dt_s, false);

@@ -127,6 +127,16 @@ impl<A: Actuator> Actuated<A> {
             accel_mps2: 0.0,
         }
     }
+
+    /// A limit was reached: snap onto it and take the new regime's acceleration. Out of
+    /// line and cold: it is rare, and inlined its constants were computed on every segment
+    /// of the SIL loop.
+    #[cold]
+    #[inline(never)]
+    fn switch_regime(&mut self) {
+        self.actuator.settle(&mut self.paddle);
+        self.accel_mps2 = self.actuator.accel(&self.paddle, self.command_mps2);
+    }
 }
 
 impl<A: Actuator> Surface for Actuated<A> {
@@ -151,8 +161,7 @@ impl<A: Actuator> Surface for Actuated<A> {
         self.paddle.height_m += dt * (self.paddle.velocity_mps + 0.5 * a * dt);
         self.paddle.velocity_mps += a * dt;
         if to_switch {
-            self.actuator.settle(&mut self.paddle);
-            self.accel_mps2 = self.actuator.accel(&self.paddle, self.command_mps2);
+            self.switch_regime();
         }
     }
     #[inline]

@@ -6,7 +6,7 @@ use super::run::{End, Recorder, RunError, RunOptions, MAX_PHASE_SAMPLES};
 use super::scene::Scene;
 use crate::controller::{Counted, StepController};
 use crate::effects::jitter::Jitter;
-use crate::effects::sensor::Sensor;
+use crate::effects::sensor::{index_time_s, Sensor};
 use crate::engine::Flight;
 use crate::model::line::{Advance, LinePlant};
 use crate::model::surface::Surface;
@@ -94,6 +94,7 @@ const MAX_SEGMENT_CAPS: u32 = 64;
 
 /// Advance `plant` to `target_s` (or the impact limit `total`); true if that limit was
 /// reached. A plant still short of the target after [`MAX_SEGMENT_CAPS`] calls is stalled.
+#[inline(always)]
 fn advance_stretch<F: Flight, S: Surface, J: Jitter>(
     plant: &mut LinePlant<F, S, J>,
     target_s: f64,
@@ -116,6 +117,7 @@ fn advance_stretch<F: Flight, S: Surface, J: Jitter>(
 /// their times (at most `samples` of them fall in one period; the loop is bounded by that
 /// and fails rather than end the period early); true if the impact limit `total` was
 /// reached.
+#[inline(always)]
 fn advance_period<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
     plant: &mut LinePlant<F, S, J>,
     sensor: &mut Z,
@@ -132,11 +134,22 @@ fn advance_period<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
         let ts = sensor.next_sample_time_s();
         if ts <= plant.time_s {
             sensor.sample(plant.time_s, plant.ball.height_m);
-        } else if advance_stretch(plant, ts.min(t_next_s), total, rec)? {
+        } else if advance_stretch(plant, earlier(ts, t_next_s), total, rec)? {
             return Ok(true);
         }
     }
     Err(stalled(plant, "the control period did not complete"))
+}
+
+/// The earlier of two times, s, neither NaN (`f64::min`'s NaN handling cost instructions
+/// in the SIL loop's every period).
+#[inline(always)]
+fn earlier(a_s: f64, b_s: f64) -> f64 {
+    if a_s < b_s {
+        a_s
+    } else {
+        b_s
+    }
 }
 
 /// The frame of control step `k` at `t_k_s`, after taking the samples due now.
@@ -199,14 +212,14 @@ where
             end = End::Impacts;
             break;
         }
-        let frame = frame(&plant, &mut sensor, k, k as f64 * dt);
+        let frame = frame(&plant, &mut sensor, k, index_time_s(k, dt));
         let command = ctrl.command(&frame)?;
         plant.surface.command(f64::from(command.paddle_accel_mps2));
         let phase = &mut rec.out.phase;
         if o.record_phase && k % phase_every == 0 && phase.len() < MAX_PHASE_SAMPLES {
             phase.push((plant.ball.height_m, plant.ball.velocity_mps));
         }
-        let t_next = (k + 1) as f64 * dt;
+        let t_next = index_time_s(k + 1, dt);
         if advance_period(&mut plant, &mut sensor, (t_next, samples), total, rec)? {
             end = End::Impacts;
             break;
