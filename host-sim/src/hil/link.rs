@@ -19,6 +19,9 @@ use std::os::fd::{AsRawFd, RawFd};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+/// How long a wait for the firmware's answer looks without sleeping (see `Link::receive`).
+const SPIN: Duration = Duration::from_micros(200);
+
 /// Bytes read from the link at a time.
 const READ_CHUNK: usize = 4096;
 
@@ -170,8 +173,18 @@ impl Link {
         };
         // Round up, so a wait shorter than 1 ms still waits instead of spinning.
         let ms = wait.as_micros().div_ceil(1000).min(i32::MAX as u128) as libc::c_int;
-        // Safety: `fds` is one valid pollfd for the duration of the call.
-        let ready = unsafe { libc::poll(&mut fds, 1, ms) };
+        // Look without sleeping for a little while first: the answer usually comes within
+        // tens of microseconds, and a sleeping wait adds a wake-up to every round trip.
+        let spin_until = Instant::now() + SPIN;
+        let mut ready = 0;
+        while ready == 0 && Instant::now() < spin_until {
+            // Safety: `fds` is one valid pollfd for the duration of the call.
+            ready = unsafe { libc::poll(&mut fds, 1, 0) };
+        }
+        if ready == 0 {
+            // Safety: as above.
+            ready = unsafe { libc::poll(&mut fds, 1, ms) };
+        }
         if ready < 0 {
             let e = std::io::Error::last_os_error();
             return match e.kind() {
