@@ -22,10 +22,9 @@
 use super::super::geometry::{Pose, Vec2};
 use super::super::part::Part;
 use super::super::primitives::{
-    can_jog, drop_and_catch, jog_estimate_s, jog_tilts, turn_drift_m, turn_landing_radius_m,
-    turn_min_drift_s,
+    can_jog, drift_rest_limit_rad, drift_step_estimate_s, drop_and_catch, jog_estimate_s,
+    jog_tilts, turn_drift_m, turn_landing_radius_m, turn_min_drift_s, MAX_DRIFT_STEPS, SETTLE_S,
 };
-use super::super::pushes::{min_radius_free, RATE_SPAN};
 use super::super::sim::Schedule;
 use super::super::stability::{x_range_on_arc, ANGLE_GRID_RAD};
 use super::goal::Sequence;
@@ -51,31 +50,18 @@ pub struct RadiusTable {
 }
 
 impl RadiusTable {
-    /// Tabulates the free-rate minimum radius ([`min_radius_free`]) for every hull edge of
-    /// `f.part`.
+    /// Tabulates the free-rate minimum radius
+    /// ([`super::super::pushes::EdgePush::min_radius_free`]) for every hull edge of `f.part`.
     pub fn new(f: &Feeder) -> Self {
         let n = (f.drive.max_angle_rad / ANGLE_GRID_RAD).ceil() as usize + 1;
-        let (w, vb, mu) = (
-            f.drive.push_rate_radps,
-            f.setup.medium.belt_speed_mps,
-            f.setup.medium.fence_mu,
-        );
         let table = |sign: f64| -> Vec<Vec<f64>> {
-            f.part
-                .edges
-                .iter()
+            (0..f.part.edges.len())
                 .map(|e| {
+                    let push = f.pusher(e);
                     let mut acc = 0.0f64;
                     (0..=n)
                         .map(|i| {
-                            acc = acc.max(min_radius_free(
-                                e,
-                                f.part.rho_m,
-                                sign * i as f64 * ANGLE_GRID_RAD,
-                                w,
-                                vb,
-                                mu,
-                            ));
+                            acc = acc.max(push.min_radius_free(sign * i as f64 * ANGLE_GRID_RAD));
                             acc
                         })
                         .collect()
@@ -179,13 +165,11 @@ impl Ctx<'_> {
     fn eval(&self, x: &[f64]) -> (f64, Cons) {
         let turns = self.choices(x);
         let (f, vb) = (self.f, self.f.setup.medium.belt_speed_mps);
-        let mu = f.setup.medium.fence_mu;
         let (mut cost, mut cons) = (0.0, Vec::with_capacity(16 * turns.len() + 8));
         let mut r_prev = self.r0;
         for (k, c) in turns.iter().enumerate() {
             let e = self.seq.edges[k];
-            cost += jog_estimate_s(&f.drive, vb, mu, c.r_before_m - r_prev);
-            jog_constraints(f, self.t, e, r_prev, c.r_before_m, &mut cons);
+            cost += jog_constraints(f, self.t, e, r_prev, c.r_before_m, &mut cons);
             let to = self.seq.edges[k + 1];
             cost += f.push_time_s(e, c.r_before_m, 0.0, c.theta_plus_rad)
                 + c.drift_m.max(0.0) / vb
@@ -194,8 +178,7 @@ impl Ctx<'_> {
             r_prev = c.r_after_m;
         }
         let goal = *self.seq.edges.last().unwrap_or(&0);
-        cost += jog_estimate_s(&f.drive, vb, mu, self.r_goal - r_prev);
-        jog_constraints(f, self.t, goal, r_prev, self.r_goal, &mut cons);
+        cost += jog_constraints(f, self.t, goal, r_prev, self.r_goal, &mut cons);
         (cost, cons)
     }
 }
@@ -215,7 +198,10 @@ fn fence_slack(f: &Feeder, p: &Part, edge: usize, r: f64) -> f64 {
 /// Named constraint values (>= 0 feasible).
 pub type Cons = Vec<(&'static str, f64)>;
 
-/// Constraints of a jog on `edge` from `from` to `to` (appended to `cons`).
+/// Constraints of a jog on `edge` from `from` to `to` (appended to `cons`); returns the
+/// jog's estimated time, s. A direction is feasible for the slide jog (no tipping, its
+/// pushes above the minimum radius) or for the push-and-drift jog ([`drift_jog_slack`]);
+/// the estimate is the slide's where it works, else the push-and-drift jog's.
 pub fn jog_constraints(
     f: &Feeder,
     t: &RadiusTable,
@@ -223,20 +209,36 @@ pub fn jog_constraints(
     from: f64,
     to: f64,
     cons: &mut Cons,
-) {
+) -> f64 {
     let (p, mu, tilt) = (&f.part, f.setup.medium.fence_mu, f.drive.jog_tilt_rad);
     let e = &p.edges[edge];
     let scale = p.radius_m;
     let d = (to - from) / scale;
     let slack = 1e-4 / scale;
+    let (drift, drift_s) = if d.abs() > slack {
+        drift_jog_slack(f, t, edge, from, to)
+    } else {
+        (f64::NEG_INFINITY, 0.0)
+    };
+    let (drift_out, drift_in) = if d > 0.0 {
+        (drift, f64::NEG_INFINITY)
+    } else {
+        (f64::NEG_INFINITY, drift)
+    };
     let out = if can_jog(e, mu, true) { 1.0 } else { slack - d };
-    cons.push(("jog: the edge cannot slide outward without tipping", out));
+    cons.push((
+        "jog: the edge cannot slide outward without tipping (nor push-and-drift)",
+        or_drift(out, drift_out),
+    ));
     let inward = if can_jog(e, mu, false) {
         1.0
     } else {
         slack + d
     };
-    cons.push(("jog: the edge cannot slide inward without tipping", inward));
+    cons.push((
+        "jog: the edge cannot slide inward without tipping (nor push-and-drift)",
+        or_drift(inward, drift_in),
+    ));
     cons.push(("jog: contact beyond the fence", fence_slack(f, p, edge, to)));
     // Inward: the tilt up is a stable push at the starting radius; outward: the return
     // from -tilt is a stable push at the final radius (some tilt of [`jog_tilts`]).
@@ -245,17 +247,19 @@ pub fn jog_constraints(
         .iter()
         .map(|&a| (from - t.up(edge, a)) / scale)
         .fold(f64::NEG_INFINITY, f64::max);
+    let up = d.max(up - PLAN_MARGIN);
     cons.push((
-        "jog: radius below the minimum for the inward tilt",
-        d.max(up - PLAN_MARGIN),
+        "jog: radius below the minimum for the inward tilt (and no push-and-drift)",
+        or_drift(up, drift_in),
     ));
     let down = tilts
         .iter()
         .map(|&a| (to - t.down(edge, -a)) / scale)
         .fold(f64::NEG_INFINITY, f64::max);
+    let down = (-d).max(down - PLAN_MARGIN);
     cons.push((
-        "jog: radius below the minimum for the outward return",
-        (-d).max(down - PLAN_MARGIN),
+        "jog: radius below the minimum for the outward return (and no push-and-drift)",
+        or_drift(down, drift_out),
     ));
     let belt = if d.abs() > 1e-4 / scale {
         belt_slack(f, edge, from, -tilt, tilt).min(belt_slack(f, edge, to, -tilt, tilt))
@@ -263,6 +267,69 @@ pub fn jog_constraints(
         1.0
     };
     cons.push(("jog: part off the belt", belt));
+    let slide_ok = out.min(inward).min(up).min(down) >= 0.0;
+    if slide_ok || drift_s == 0.0 {
+        jog_estimate_s(&f.drive, f.setup.medium.belt_speed_mps, mu, to - from)
+    } else {
+        drift_s
+    }
+}
+
+/// A slide-jog constraint value `slide`, relaxed to the push-and-drift jog's `drift` where
+/// the slide fails (where it holds, the slide is what the jog does, so the value stays).
+fn or_drift(slide: f64, drift: f64) -> f64 {
+    if slide >= 0.0 {
+        slide
+    } else {
+        slide.max(drift)
+    }
+}
+
+/// The push-and-drift jog on `edge` from `from` to `to` (m): its slack (>= 0 when it
+/// takes at most 80 % of [`MAX_DRIFT_STEPS`] steps by the sticking closed form at the
+/// largest step angle the radius table allows, and the fence can drop away from the
+/// part) and its estimated time, s.
+pub fn drift_jog_slack(f: &Feeder, t: &RadiusTable, edge: usize, from: f64, to: f64) -> (f64, f64) {
+    let e = &f.part.edges[edge];
+    let outward = to > from;
+    let vb = f.setup.medium.belt_speed_mps;
+    let (u0, u1) = (from - e.a_m, to - e.a_m);
+    let sep = (f.drive.max_rate_radps * u0.min(u1) - 1.3 * vb) / vb;
+    let delta = drift_delta(f, t, edge, from.min(to), outward);
+    if sep < 0.0 || delta <= 0.0 {
+        return (sep.min(-1.0), 0.0);
+    }
+    let steps = (u1 / u0).ln().abs() / (1.0 / delta.cos()).ln();
+    let cap = 0.8 * MAX_DRIFT_STEPS as f64;
+    let per = drift_step_estimate_s(&f.drive, vb, e, f.part.rho_m, 0.5 * (u0 + u1), delta);
+    ((cap - steps) / cap, steps.ceil().max(1.0) * per + SETTLE_S)
+}
+
+/// Largest step angle, rad, of a push-and-drift step on `edge` at radius `r_m` by the
+/// radius table (the table's version of [`super::detail::drift_step_limit_rad`]).
+fn drift_delta(f: &Feeder, t: &RadiusTable, edge: usize, r_m: f64, outward: bool) -> f64 {
+    let mut cap = f.drive.jog_tilt_rad.min(f.drive.max_angle_rad);
+    if outward {
+        cap = cap.min(drift_rest_limit_rad(
+            &f.part.edges[edge],
+            f.setup.medium.fence_mu,
+        ));
+    }
+    let n = (cap / ANGLE_GRID_RAD).floor() as usize;
+    let mut best = 0.0;
+    for i in 1..=n {
+        let d = i as f64 * ANGLE_GRID_RAD;
+        let need = if outward {
+            t.down(edge, -d)
+        } else {
+            t.up(edge, d)
+        };
+        if need > r_m {
+            break;
+        }
+        best = d;
+    }
+    best
 }
 
 /// Constraints of one turn (appended to `cons`).
@@ -311,11 +378,11 @@ pub fn turn_constraints(
     cons.push(("turn: the fence touches the part during the drift", clear));
 }
 
-/// The fence's rate at the catch of turn `c` onto `to` (the slowest rate where the push
-/// back has no stable one: the table's constraint reports that).
+/// The fence's rate at the catch of turn `c` onto `to` (the edge's slowest rate where the
+/// push back has no stable one: the table's constraint reports that).
 pub fn catch_rate(f: &Feeder, to: usize, c: &TurnChoice) -> f64 {
     f.catch_rate(to, c.r_after_m, c.theta_minus_rad)
-        .unwrap_or(f.drive.push_rate_radps / RATE_SPAN)
+        .unwrap_or_else(|| f.pusher(to).floor_radps())
 }
 
 /// Smallest distance, m, between the fence segment and the drifting part, sampled over
