@@ -99,10 +99,11 @@
 //! `tan delta <= k min(mu, b / h)`, the friction cone and the resultant, which meets the
 //! fence h tan delta beyond the COM's foot, before the end vertex) and a stable push
 //! back. That too exists for small delta on every stable edge (b > 0), so **every stable
-//! edge can be jogged both ways from every radius** (with the fence dropping away faster
-//! than the part drifts: `omega_max u > v_b`), the paper's "Any stable push may be
-//! preceded by jogs to move the object out to the minimum contact radius". The price is
-//! speed: an edge whose COM foot lies b from its end vertex at height h steps out by at
+//! edge whose landing sticks can be jogged both ways from every radius** (with the fence
+//! dropping away faster than the part drifts: `omega_max u > v_b`), the paper's "Any
+//! stable push may be preceded by jogs to move the object out to the minimum contact
+//! radius". Where the landing slips, an outward step gains only where `u delta^2 / 2`
+//! beats the (first-order) slip: at large u and wide delta. The other price is speed: an edge whose COM foot lies b from its end vertex at height h steps out by at
 //! most `tan delta = k b / h`, a relative gain `≈ (k b / h)^2 / 2` per step (part 44 of the
 //! feeding sweep: b = 0.57 mm, h = 31 mm, 1.4e-4 per step); the planner caps the steps
 //! ([`MAX_DRIFT_STEPS`]) and such parts turn off that edge directly instead, with slow
@@ -393,6 +394,20 @@ pub fn landing_sticks(edge: &HullEdge, rho_m: f64, mu: f64, catch_rad: f64) -> b
     let (s, c) = catch_rad.sin_cos();
     let (a, h, r2) = (edge.a_m, edge.h_m, rho_m * rho_m);
     ((r2 + a * a) * s + a * h * c).abs() <= mu * (a * h * s + (r2 + h * h) * c)
+}
+
+/// Fraction of the exterior angle at an edge's start vertex a push-and-drift step may
+/// tilt the edge against the fence.
+pub const DRIFT_LANDING_FRACTION: f64 = 0.8;
+
+/// Widest push-and-drift step, rad, for the landing to be on the start vertex of hull
+/// edge `edge`: a step tilts the edge by its angle against the catching fence, and past
+/// the exterior angle at that vertex (the turn from the previous hull edge) the previous
+/// edge would meet the fence first and the part land on it; [`DRIFT_LANDING_FRACTION`] of
+/// that angle.
+pub fn drift_landing_limit_rad(part: &Part, edge: usize) -> f64 {
+    let n = part.edges.len();
+    DRIFT_LANDING_FRACTION * part.rotation_between(edge, (edge + n - 1) % n)
 }
 
 /// Steepest angle, rad, of a push-and-drift step of `edge` the fence may rest the part

@@ -2,10 +2,10 @@
 //! convergent turns, tuned) by simulating the mechanics from the state the previous step
 //! left: what the execution will do, noise aside.
 
-use super::super::geometry::Pose;
+use super::super::geometry::{Pose, Vec2};
 use super::super::primitives::{
-    drift_rest_limit_rad, jog_tilts, slide_speed_mps, turn_drift_m, turn_landing_radius_m,
-    turn_schedule, Primitive, TurnPushes, MAX_DRIFT_STEPS, SETTLE_S,
+    drift_landing_limit_rad, drift_rest_limit_rad, jog_tilts, slide_speed_mps, turn_drift_m,
+    turn_landing_radius_m, turn_schedule, Primitive, TurnPushes, MAX_DRIFT_STEPS, SETTLE_S,
 };
 use super::super::pushes::extend;
 use super::super::quasistatic::{Mode, Motion};
@@ -408,9 +408,7 @@ pub fn drift_step(f: &Feeder, st: &State, angle: f64) -> Result<(State, Schedule
     } else {
         s.move_to(angle, f.drive.max_rate_radps);
         let (landed, mut s) = rest_after(f, (st.pose, st.t_s), s)?;
-        let r_landed = landed
-            .com_m
-            .dot(super::super::geometry::Vec2::from_angle(angle));
+        let r_landed = landed.com_m.dot(Vec2::from_angle(angle));
         let back = f
             .push_profile(st.edge, r_landed, angle, 0.0)
             .ok_or_else(|| no_push(r_landed))?;
@@ -432,10 +430,15 @@ pub fn drift_step(f: &Feeder, st: &State, angle: f64) -> Result<(State, Schedule
 /// push-and-drift step on `edge` at contact radius `r_m`: outward, the part must rest at
 /// -delta ([`drift_rest_limit_rad`]) and be pushed back from there; inward, pushed from 0
 /// to delta. 0 when none. Pushes are stable at larger radii too, so `r_m` is the least
-/// radius the steps see (the start of an outward jog, the end of an inward one).
+/// radius the steps see (the start of an outward jog, the end of an inward one). Every
+/// step also lands on the edge's start vertex ([`drift_landing_limit_rad`]).
 pub fn drift_step_limit_rad(f: &Feeder, edge: usize, r_m: f64, outward: bool) -> f64 {
     let e = &f.part.edges[edge];
-    let mut cap = f.drive.jog_tilt_rad.min(f.drive.max_angle_rad);
+    let mut cap = f
+        .drive
+        .jog_tilt_rad
+        .min(f.drive.max_angle_rad)
+        .min(drift_landing_limit_rad(&f.part, edge));
     if outward {
         cap = cap.min(drift_rest_limit_rad(e, f.setup.medium.fence_mu));
     }

@@ -268,7 +268,25 @@ fn build(
     if let [Hop::Convergent { via }] = seq.hops.as_slice() {
         return convergent(f, t, st, seq.edges[1], *via, r_goal);
     }
-    let sol = optimize::solve(f, t, seq, st.r_m, r_goal)
+    // Slide jogs first (the plans of parts whose edges all slide are unchanged by the
+    // push-and-drift jog), then with push-and-drift jogs allowed.
+    detail_sequence(f, t, seq, st, r_goal, false).or_else(|slide| {
+        detail_sequence(f, t, seq, st, r_goal, true)
+            .map_err(|drift| format!("{slide}; with push-and-drift jogs: {drift}"))
+    })
+}
+
+/// Optimizes `seq` (jogs by sliding only, or also by push-and-drift with `allow_drift`)
+/// and details it into pieces.
+fn detail_sequence(
+    f: &Feeder,
+    t: &RadiusTable,
+    seq: &Sequence,
+    st: &State,
+    r_goal: f64,
+    allow_drift: bool,
+) -> Result<Vec<Piece>, String> {
+    let sol = optimize::solve(f, t, seq, (st.r_m, r_goal), allow_drift)
         .map_err(|e| format!("sequence {:?}: {e}", seq.edges))?;
     let mut pieces = Vec::new();
     let mut cur = *st;

@@ -5,8 +5,9 @@
 //! Variables per turn k: the jog target r_k (contact radius on the old edge when the turn
 //! starts) and theta-_k (theta+_k = theta-_k + Psi_k). The landing radius r'_k and drift
 //! D_k follow in closed form ([`turn_landing_radius_m`]). Objective: total time, jogs by
-//! the estimate [`jog_estimate_s`] (the paper: "an approximation for the time required
-//! for the jogs ... Details of the jogs are planned afterwards"). Constraints, one per
+//! the estimates [`jog_estimate_s`] (slide) and [`drift_jog_slack`] (push-and-drift) (the
+//! paper: "an approximation for the time required for the jogs ... Details of the jogs
+//! are planned afterwards"). Constraints, one per
 //! bullet of sec. 3.3:
 //! - contact radius above the minimum for every stable push (up to theta+ on the old
 //!   edge, from theta- on the new one, and the jogs' tilts);
@@ -17,13 +18,15 @@
 //!   leaving faster than the part, and enough drift time to drop and rise again);
 //! - start and goal radii match (the first jog starts at the arrival radius, the final
 //!   jog ends at the goal radius); jogs only in directions the edge can slide without
-//!   tipping ([`can_jog`]).
+//!   tipping ([`can_jog`]) with its pushes above the minimum radius, or else move by
+//!   push-and-drift within its step budget ([`drift_jog_slack`]).
 
 use super::super::geometry::{Pose, Vec2};
 use super::super::part::Part;
 use super::super::primitives::{
-    can_jog, drift_rest_limit_rad, drift_step_estimate_s, drop_and_catch, jog_estimate_s,
-    jog_tilts, turn_drift_m, turn_landing_radius_m, turn_min_drift_s, MAX_DRIFT_STEPS, SETTLE_S,
+    can_jog, drift_landing_limit_rad, drift_rest_limit_rad, drift_step_estimate_s, drop_and_catch,
+    jog_estimate_s, jog_tilts, turn_drift_m, turn_landing_radius_m, turn_min_drift_s,
+    MAX_DRIFT_STEPS, SETTLE_S,
 };
 use super::super::sim::Schedule;
 use super::super::stability::{x_range_on_arc, ANGLE_GRID_RAD};
@@ -120,6 +123,7 @@ struct Ctx<'a> {
     r0: f64,
     r_goal: f64,
     bounds: Vec<(f64, f64)>,
+    allow_drift: bool,
 }
 
 /// Interval of theta- for a turn of `psi`: theta- <= 0, theta+ = theta- + psi in
@@ -169,7 +173,8 @@ impl Ctx<'_> {
         let mut r_prev = self.r0;
         for (k, c) in turns.iter().enumerate() {
             let e = self.seq.edges[k];
-            cost += jog_constraints(f, self.t, e, r_prev, c.r_before_m, &mut cons);
+            let jog = (e, r_prev, c.r_before_m);
+            cost += jog_constraints(f, self.t, jog, self.allow_drift, &mut cons);
             let to = self.seq.edges[k + 1];
             cost += f.push_time_s(e, c.r_before_m, 0.0, c.theta_plus_rad)
                 + c.drift_m.max(0.0) / vb
@@ -178,7 +183,8 @@ impl Ctx<'_> {
             r_prev = c.r_after_m;
         }
         let goal = *self.seq.edges.last().unwrap_or(&0);
-        cost += jog_constraints(f, self.t, goal, r_prev, self.r_goal, &mut cons);
+        let jog = (goal, r_prev, self.r_goal);
+        cost += jog_constraints(f, self.t, jog, self.allow_drift, &mut cons);
         (cost, cons)
     }
 }
@@ -200,14 +206,14 @@ pub type Cons = Vec<(&'static str, f64)>;
 
 /// Constraints of a jog on `edge` from `from` to `to` (appended to `cons`); returns the
 /// jog's estimated time, s. A direction is feasible for the slide jog (no tipping, its
-/// pushes above the minimum radius) or for the push-and-drift jog ([`drift_jog_slack`]);
-/// the estimate is the slide's where it works, else the push-and-drift jog's.
+/// pushes above the minimum radius) or, with `allow_drift`, for the push-and-drift jog
+/// ([`drift_jog_slack`]); the estimate is the slide's where it works, else the
+/// push-and-drift jog's.
 pub fn jog_constraints(
     f: &Feeder,
     t: &RadiusTable,
-    edge: usize,
-    from: f64,
-    to: f64,
+    (edge, from, to): (usize, f64, f64),
+    allow_drift: bool,
     cons: &mut Cons,
 ) -> f64 {
     let (p, mu, tilt) = (&f.part, f.setup.medium.fence_mu, f.drive.jog_tilt_rad);
@@ -215,7 +221,7 @@ pub fn jog_constraints(
     let scale = p.radius_m;
     let d = (to - from) / scale;
     let slack = 1e-4 / scale;
-    let (drift, drift_s) = if d.abs() > slack {
+    let (drift, drift_s) = if allow_drift && d.abs() > slack {
         drift_jog_slack(f, t, edge, from, to)
     } else {
         (f64::NEG_INFINITY, 0.0)
@@ -308,7 +314,11 @@ pub fn drift_jog_slack(f: &Feeder, t: &RadiusTable, edge: usize, from: f64, to: 
 /// Largest step angle, rad, of a push-and-drift step on `edge` at radius `r_m` by the
 /// radius table (the table's version of [`super::detail::drift_step_limit_rad`]).
 fn drift_delta(f: &Feeder, t: &RadiusTable, edge: usize, r_m: f64, outward: bool) -> f64 {
-    let mut cap = f.drive.jog_tilt_rad.min(f.drive.max_angle_rad);
+    let mut cap = f
+        .drive
+        .jog_tilt_rad
+        .min(f.drive.max_angle_rad)
+        .min(drift_landing_limit_rad(&f.part, edge));
     if outward {
         cap = cap.min(drift_rest_limit_rad(
             &f.part.edges[edge],
@@ -426,13 +436,14 @@ pub fn drift_clearance(f: &Feeder, from: usize, c: &TurnChoice, catch: f64) -> f
 }
 
 /// Optimizes the regular turns of `seq` from arrival radius `r0` to goal radius
-/// `r_goal`. When no feasible parameters were found: the most violated constraint.
+/// `r_goal`, jogs by sliding only or, with `allow_drift`, also by push-and-drift. When no
+/// feasible parameters were found: the most violated constraint.
 pub fn solve(
     f: &Feeder,
     t: &RadiusTable,
     seq: &Sequence,
-    r0: f64,
-    r_goal: f64,
+    (r0, r_goal): (f64, f64),
+    allow_drift: bool,
 ) -> Result<Solution, String> {
     let p = &f.part;
     let mut bounds = Vec::new();
@@ -458,6 +469,7 @@ pub fn solve(
         r0,
         r_goal,
         bounds,
+        allow_drift,
     };
     if seq.hops.is_empty() {
         let (cost, cons) = ctx.eval(&[]);
