@@ -53,7 +53,8 @@
 //! 3. **Landing.** A part released flush at fence angle theta1 and caught by the fence at
 //!    theta2 < theta1 (the fence is below the drifting part, so it can only meet it at
 //!    a smaller angle) first touches the edge's **start vertex** (the fence is turned
-//!    clockwise relative to the edge), which lies at fence coordinate `u = r - a` while
+//!    clockwise relative to the edge, by less than the exterior angle at that vertex:
+//!    [`drift_landing_limit_rad`]), which lies at fence coordinate `u = r - a` while
 //!    the edge is flush. The belt's drag through the COM, a beyond the vertex, then
 //!    turns the part clockwise about it onto the edge. Solving eq. (1) of
 //!    [`super::quasistatic`] for a point stick at the vertex (fence at rest, COM at fence
