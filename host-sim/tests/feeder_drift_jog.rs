@@ -7,10 +7,12 @@
 use dexter_sim::model::feeder::execute::{execute, FEED_TOL_M};
 use dexter_sim::model::feeder::geometry::{Pose, Vec2};
 use dexter_sim::model::feeder::part::Part;
-use dexter_sim::model::feeder::planner::detail::{arrive, drift_jog, drift_step, jog, State};
+use dexter_sim::model::feeder::planner::detail::{
+    arrive, drift_jog, drift_step, drift_step_limit_rad, jog, State,
+};
 use dexter_sim::model::feeder::planner::{plan, Feeder, PlanOptions};
 use dexter_sim::model::feeder::primitives::{
-    can_jog, drift_step_radius_m, landing_sticks, Drive, Primitive,
+    can_jog, drift_landing_limit_rad, drift_step_radius_m, landing_sticks, Drive, Primitive,
 };
 use dexter_sim::model::feeder::quasistatic::Medium;
 use dexter_sim::model::feeder::sim::Setup;
@@ -212,4 +214,45 @@ fn a_part_whose_com_foot_is_half_a_millimetre_from_a_vertex_is_fed() {
         "{}",
         end.r_m - st.r_m
     );
+}
+
+#[test]
+fn an_inward_step_is_no_wider_than_the_landing_can_turn_back() {
+    // Released at delta, the part lands on the edge's start vertex; the fence's force
+    // acts there, so only the belt's drag through the COM turns the part about it:
+    // back onto the edge iff the COM lies beyond the vertex in world x,
+    // a cos delta - h sin delta > 0, tan delta < a / h. A regular 12-gon of circumradius
+    // 30 mm (hand: side 2 R sin 15 deg = 15.529 mm, a = 7.765 mm, h = R cos 15 deg =
+    // 28.978 mm, a / h = 0.26795 = tan 15 deg) with margin k = 0.9:
+    // atan(0.9 * 0.26795) = 13.557 deg, 13.5 deg on the 0.5 deg grid. (Its exterior angle
+    // bound, 0.8 * 30 = 24 deg, and with mu = 1 the jog tilt, 60 deg, are wider.)
+    let v: Vec<Vec2> = (0..12)
+        .map(|i| {
+            let t = std::f64::consts::TAU * f64::from(i) / 12.0;
+            Vec2::new(0.03 * t.cos(), 0.03 * t.sin())
+        })
+        .collect();
+    let f = cell(Part::new(&v, None).unwrap(), 1.0);
+    let (st, _, _) = arrive(
+        &f,
+        Pose {
+            com_m: Vec2::new(0.3, 0.1),
+            // an edge flat at the bottom (a vertex down would balance on it)
+            angle_rad: std::f64::consts::PI / 12.0,
+        },
+        60.0,
+    )
+    .unwrap();
+    let lim = drift_step_limit_rad(&f, st.edge, st.r_m, false);
+    assert!(
+        (lim.to_degrees() - 13.5).abs() < 1e-9,
+        "{}",
+        lim.to_degrees()
+    );
+    assert!((drift_landing_limit_rad(&f.part, st.edge).to_degrees() - 24.0).abs() < 1e-9);
+    let (end, _) = drift_step(&f, &st, lim).unwrap();
+    assert_eq!(end.edge, st.edge);
+    // Past tan delta = a / h (15 deg), at 20 deg, the part turns onto the previous edge.
+    let err = drift_step(&f, &st, 20f64.to_radians()).unwrap_err();
+    assert!(err.contains("tipped"), "{err}");
 }

@@ -55,8 +55,11 @@
 //!    a smaller angle) first touches the edge's **start vertex** (the fence is turned
 //!    clockwise relative to the edge, by less than the exterior angle at that vertex:
 //!    [`drift_landing_limit_rad`]), which lies at fence coordinate `u = r - a` while
-//!    the edge is flush. The belt's drag through the COM, a beyond the vertex, then
-//!    turns the part clockwise about it onto the edge. Solving eq. (1) of
+//!    the edge is flush. The fence's force acts at the vertex, so only the belt's drag
+//!    through the COM turns the part about it, clockwise onto the edge iff the COM lies
+//!    beyond the vertex in world x: `a cos theta1 - h sin theta1 > 0`, i.e.
+//!    `tan theta1 < a / h` (else it turns onto the previous edge;
+//!    [`drift_pivot_limit_rad`]). Solving eq. (1) of
 //!    [`super::quasistatic`] for a point stick at the vertex (fence at rest, COM at fence
 //!    coordinates q = (a, h) from the vertex, `J_a = rho^2 + a^2 + h^2`,
 //!    `s2, c2 = sin, cos theta2`):
@@ -93,9 +96,11 @@
 //! what the mechanics do.
 //!
 //! **Where the steps are stable.** The inward step needs a stable push from 0 to delta
-//! at the current radius: with the slowest rates of [`super::pushes::EdgePush::floor_radps`]
-//! every stable edge can be pushed off theta = 0 at every radius, so inward steps exist
-//! for small delta on every stable edge. The outward step needs the part to **rest** flush
+//! at the current radius and, released at delta, a landing that turns the part back onto
+//! the edge, `tan delta < a / h` (the outward step releases at 0, where that holds on
+//! every stable edge): with the slowest rates of
+//! [`super::pushes::EdgePush::floor_radps`] every stable edge can be pushed off theta = 0
+//! at every radius, so inward steps exist for small delta on every stable edge. The outward step needs the part to **rest** flush
 //! at -delta (the window of [`super::pushes::window`] holds omega = 0:
 //! `tan delta <= k min(mu, b / h)`, the friction cone and the resultant, which meets the
 //! fence h tan delta beyond the COM's foot, before the end vertex) and a stable push
@@ -409,6 +414,14 @@ pub const DRIFT_LANDING_FRACTION: f64 = 0.8;
 pub fn drift_landing_limit_rad(part: &Part, edge: usize) -> f64 {
     let n = part.edges.len();
     DRIFT_LANDING_FRACTION * part.rotation_between(edge, (edge + n - 1) % n)
+}
+
+/// Widest release angle, rad, of an inward push-and-drift step of `edge` for the landed
+/// part to turn back onto the edge: the COM must lie beyond the start vertex in world x,
+/// `tan delta < a / h`; with the margin, `atan(k a / h)`, `k = 1 -` [`PUSH_MARGIN`]
+/// (module doc).
+pub fn drift_pivot_limit_rad(edge: &HullEdge) -> f64 {
+    ((1.0 - PUSH_MARGIN) * edge.a_m / edge.h_m).max(0.0).atan()
 }
 
 /// Steepest angle, rad, of a push-and-drift step of `edge` the fence may rest the part

@@ -4,8 +4,9 @@
 
 use super::super::geometry::{Pose, Vec2};
 use super::super::primitives::{
-    drift_landing_limit_rad, drift_rest_limit_rad, jog_tilts, slide_speed_mps, turn_drift_m,
-    turn_landing_radius_m, turn_schedule, Primitive, TurnPushes, MAX_DRIFT_STEPS, SETTLE_S,
+    drift_landing_limit_rad, drift_pivot_limit_rad, drift_rest_limit_rad, jog_tilts,
+    slide_speed_mps, turn_drift_m, turn_landing_radius_m, turn_schedule, Primitive, TurnPushes,
+    MAX_DRIFT_STEPS, SETTLE_S,
 };
 use super::super::pushes::extend;
 use super::super::quasistatic::{Mode, Motion};
@@ -429,7 +430,8 @@ pub fn drift_step(f: &Feeder, st: &State, angle: f64) -> Result<(State, Schedule
 /// Largest step angle, rad (a multiple of the angle grid, at most the jog tilt), of a
 /// push-and-drift step on `edge` at contact radius `r_m`: outward, the part must rest at
 /// -delta ([`drift_rest_limit_rad`]) and be pushed back from there; inward, pushed from 0
-/// to delta. 0 when none. Pushes are stable at larger radii too, so `r_m` is the least
+/// to delta and turn back onto the edge as it lands ([`drift_pivot_limit_rad`]). 0 when
+/// none. Pushes are stable at larger radii too, so `r_m` is the least
 /// radius the steps see (the start of an outward jog, the end of an inward one). Every
 /// step also lands on the edge's start vertex ([`drift_landing_limit_rad`]).
 pub fn drift_step_limit_rad(f: &Feeder, edge: usize, r_m: f64, outward: bool) -> f64 {
@@ -439,9 +441,11 @@ pub fn drift_step_limit_rad(f: &Feeder, edge: usize, r_m: f64, outward: bool) ->
         .jog_tilt_rad
         .min(f.drive.max_angle_rad)
         .min(drift_landing_limit_rad(&f.part, edge));
-    if outward {
-        cap = cap.min(drift_rest_limit_rad(e, f.setup.medium.fence_mu));
-    }
+    cap = cap.min(if outward {
+        drift_rest_limit_rad(e, f.setup.medium.fence_mu)
+    } else {
+        drift_pivot_limit_rad(e)
+    });
     let n = (cap / ANGLE_GRID_RAD).floor() as usize;
     let mut best = 0.0;
     for i in 1..=n {

@@ -24,9 +24,9 @@
 use super::super::geometry::{Pose, Vec2};
 use super::super::part::Part;
 use super::super::primitives::{
-    can_jog, drift_landing_limit_rad, drift_rest_limit_rad, drift_step_estimate_s, drop_and_catch,
-    jog_estimate_s, jog_tilts, turn_drift_m, turn_landing_radius_m, turn_min_drift_s,
-    MAX_DRIFT_STEPS, SETTLE_S,
+    can_jog, drift_landing_limit_rad, drift_pivot_limit_rad, drift_rest_limit_rad,
+    drift_step_estimate_s, drop_and_catch, jog_estimate_s, jog_tilts, turn_drift_m,
+    turn_landing_radius_m, turn_min_drift_s, MAX_DRIFT_STEPS, SETTLE_S,
 };
 use super::super::sim::Schedule;
 use super::super::stability::{x_range_on_arc, ANGLE_GRID_RAD};
@@ -319,12 +319,12 @@ fn drift_delta(f: &Feeder, t: &RadiusTable, edge: usize, r_m: f64, outward: bool
         .jog_tilt_rad
         .min(f.drive.max_angle_rad)
         .min(drift_landing_limit_rad(&f.part, edge));
-    if outward {
-        cap = cap.min(drift_rest_limit_rad(
-            &f.part.edges[edge],
-            f.setup.medium.fence_mu,
-        ));
-    }
+    let e = &f.part.edges[edge];
+    cap = cap.min(if outward {
+        drift_rest_limit_rad(e, f.setup.medium.fence_mu)
+    } else {
+        drift_pivot_limit_rad(e)
+    });
     let n = (cap / ANGLE_GRID_RAD).floor() as usize;
     let mut best = 0.0;
     for i in 1..=n {
