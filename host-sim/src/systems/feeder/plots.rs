@@ -115,6 +115,7 @@ fn starts(plan: &[Primitive]) -> Vec<f64> {
 fn short(p: &Primitive) -> &'static str {
     match p {
         Primitive::ConvergentTurn { .. } => "conv. turn",
+        Primitive::DriftJog { .. } => "drift jog",
         other => other.name(),
     }
 }
@@ -138,9 +139,9 @@ pub fn moments(s: &Summary) -> Vec<(usize, String)> {
         });
         let mut add = |i: usize, what: String| full.push((i, what));
         match p {
-            Primitive::Jog { .. } => {
+            Primitive::Jog { .. } | Primitive::DriftJog { .. } => {
                 if let Some(i) = extreme.filter(|&i| knots[i].fence_angle_rad != 0.0) {
-                    add(i, format!("{k} jog: tilt"));
+                    add(i, format!("{k} {}: tilt", short(p)));
                 }
             }
             Primitive::Turn {

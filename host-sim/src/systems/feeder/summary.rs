@@ -68,6 +68,20 @@ pub fn primitive_text(p: &Primitive) -> String {
             "jog       edge {edge}: r {from_radius_m:.5} -> {to_radius_m:.5} m, fence tilt {:.2} deg held {hold_s:.3} s ({duration_s:.3} s)",
             deg(*tilt_rad)
         ),
+        Primitive::DriftJog {
+            edge,
+            step_angles_rad,
+            from_radius_m,
+            to_radius_m,
+            duration_s,
+        } => {
+            let widest = step_angles_rad.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+            format!(
+                "drift jog edge {edge}: r {from_radius_m:.5} -> {to_radius_m:.5} m, {} push-and-drift steps of up to {:.2} deg ({duration_s:.3} s)",
+                step_angles_rad.len(),
+                deg(widest)
+            )
+        }
         Primitive::Turn {
             from_edge,
             to_edge,

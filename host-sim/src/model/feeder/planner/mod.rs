@@ -25,7 +25,7 @@ use super::part::Part;
 use super::primitives::{
     can_jog, jog_tilts, turn_landing_radius_m, turn_min_drift_s, Drive, Primitive, TurnPushes,
 };
-use super::pushes::{self, Profile};
+use super::pushes::{EdgePush, Profile};
 use super::sim::{Schedule, Setup};
 use super::stability::x_range_on_arc;
 use super::FeederError;
@@ -46,8 +46,19 @@ pub struct Feeder {
 }
 
 impl Feeder {
+    /// The stable pushes of hull edge `edge` under this feeder's drive and medium.
+    pub fn pusher(&self, edge: usize) -> EdgePush<'_> {
+        EdgePush {
+            edge: &self.part.edges[edge],
+            rho_m: self.part.rho_m,
+            omega_max_radps: self.drive.push_rate_radps,
+            v_b_mps: self.setup.medium.belt_speed_mps,
+            mu: self.setup.medium.fence_mu,
+        }
+    }
+
     /// The rate profile of a counter-clockwise stable push of hull edge `edge` at contact
-    /// radius `r_m` from `from_rad` to `to_rad` ([`pushes::profile`]); `None` when some
+    /// radius `r_m` from `from_rad` to `to_rad` ([`EdgePush::profile`]); `None` when some
     /// angle has no stable rate up to the push rate.
     pub fn push_profile(
         &self,
@@ -56,46 +67,19 @@ impl Feeder {
         from_rad: f64,
         to_rad: f64,
     ) -> Option<Profile> {
-        pushes::profile(
-            &self.part.edges[edge],
-            self.part.rho_m,
-            r_m,
-            from_rad,
-            to_rad,
-            self.drive.push_rate_radps,
-            self.setup.medium.belt_speed_mps,
-            self.setup.medium.fence_mu,
-        )
+        self.pusher(edge).profile(r_m, from_rad, to_rad)
     }
 
     /// The fence's rate as it meets `edge` at radius `r_m` at `theta_minus` (the first
     /// cell of the push back to 0); `None` when that push has no stable rate there.
     pub fn catch_rate(&self, edge: usize, r_m: f64, theta_minus: f64) -> Option<f64> {
-        pushes::start_rate(
-            &self.part.edges[edge],
-            self.part.rho_m,
-            r_m,
-            theta_minus,
-            0.0,
-            self.drive.push_rate_radps,
-            self.setup.medium.belt_speed_mps,
-            self.setup.medium.fence_mu,
-        )
+        self.pusher(edge).start_rate(r_m, theta_minus, 0.0)
     }
 
     /// Estimated time of a stable push of `edge` at `r_m` from `from_rad` to `to_rad`, s
-    /// ([`pushes::time_estimate_s`]).
+    /// ([`EdgePush::time_estimate_s`]).
     pub fn push_time_s(&self, edge: usize, r_m: f64, from_rad: f64, to_rad: f64) -> f64 {
-        pushes::time_estimate_s(
-            &self.part.edges[edge],
-            self.part.rho_m,
-            r_m,
-            from_rad,
-            to_rad,
-            self.drive.push_rate_radps,
-            self.setup.medium.belt_speed_mps,
-            self.setup.medium.fence_mu,
-        )
+        self.pusher(edge).time_estimate_s(r_m, from_rad, to_rad)
     }
 
     /// The pushes of a turn from `from` at radius `r_m` up to `theta_plus` onto `to`,
@@ -284,7 +268,25 @@ fn build(
     if let [Hop::Convergent { via }] = seq.hops.as_slice() {
         return convergent(f, t, st, seq.edges[1], *via, r_goal);
     }
-    let sol = optimize::solve(f, t, seq, st.r_m, r_goal)
+    // Slide jogs first (the plans of parts whose edges all slide are unchanged by the
+    // push-and-drift jog), then with push-and-drift jogs allowed.
+    detail_sequence(f, t, seq, st, r_goal, false).or_else(|slide| {
+        detail_sequence(f, t, seq, st, r_goal, true)
+            .map_err(|drift| format!("{slide}; with push-and-drift jogs: {drift}"))
+    })
+}
+
+/// Optimizes `seq` (jogs by sliding only, or also by push-and-drift with `allow_drift`)
+/// and details it into pieces.
+fn detail_sequence(
+    f: &Feeder,
+    t: &RadiusTable,
+    seq: &Sequence,
+    st: &State,
+    r_goal: f64,
+    allow_drift: bool,
+) -> Result<Vec<Piece>, String> {
+    let sol = optimize::solve(f, t, seq, (st.r_m, r_goal), allow_drift)
         .map_err(|e| format!("sequence {:?}: {e}", seq.edges))?;
     let mut pieces = Vec::new();
     let mut cur = *st;

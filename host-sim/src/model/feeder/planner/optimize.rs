@@ -5,8 +5,9 @@
 //! Variables per turn k: the jog target r_k (contact radius on the old edge when the turn
 //! starts) and theta-_k (theta+_k = theta-_k + Psi_k). The landing radius r'_k and drift
 //! D_k follow in closed form ([`turn_landing_radius_m`]). Objective: total time, jogs by
-//! the estimate [`jog_estimate_s`] (the paper: "an approximation for the time required
-//! for the jogs ... Details of the jogs are planned afterwards"). Constraints, one per
+//! the estimates [`jog_estimate_s`] (slide) and [`drift_jog_slack`] (push-and-drift) (the
+//! paper: "an approximation for the time required for the jogs ... Details of the jogs
+//! are planned afterwards"). Constraints, one per
 //! bullet of sec. 3.3:
 //! - contact radius above the minimum for every stable push (up to theta+ on the old
 //!   edge, from theta- on the new one, and the jogs' tilts);
@@ -17,15 +18,16 @@
 //!   leaving faster than the part, and enough drift time to drop and rise again);
 //! - start and goal radii match (the first jog starts at the arrival radius, the final
 //!   jog ends at the goal radius); jogs only in directions the edge can slide without
-//!   tipping ([`can_jog`]).
+//!   tipping ([`can_jog`]) with its pushes above the minimum radius, or else move by
+//!   push-and-drift within its step budget ([`drift_jog_slack`]).
 
 use super::super::geometry::{Pose, Vec2};
 use super::super::part::Part;
 use super::super::primitives::{
-    can_jog, drop_and_catch, jog_estimate_s, jog_tilts, turn_drift_m, turn_landing_radius_m,
-    turn_min_drift_s,
+    can_jog, drift_landing_limit_rad, drift_pivot_limit_rad, drift_rest_limit_rad,
+    drift_step_estimate_s, drop_and_catch, jog_estimate_s, jog_tilts, turn_drift_m,
+    turn_landing_radius_m, turn_min_drift_s, MAX_DRIFT_STEPS, SETTLE_S,
 };
-use super::super::pushes::{min_radius_free, RATE_SPAN};
 use super::super::sim::Schedule;
 use super::super::stability::{x_range_on_arc, ANGLE_GRID_RAD};
 use super::goal::Sequence;
@@ -51,31 +53,18 @@ pub struct RadiusTable {
 }
 
 impl RadiusTable {
-    /// Tabulates the free-rate minimum radius ([`min_radius_free`]) for every hull edge of
-    /// `f.part`.
+    /// Tabulates the free-rate minimum radius
+    /// ([`super::super::pushes::EdgePush::min_radius_free`]) for every hull edge of `f.part`.
     pub fn new(f: &Feeder) -> Self {
         let n = (f.drive.max_angle_rad / ANGLE_GRID_RAD).ceil() as usize + 1;
-        let (w, vb, mu) = (
-            f.drive.push_rate_radps,
-            f.setup.medium.belt_speed_mps,
-            f.setup.medium.fence_mu,
-        );
         let table = |sign: f64| -> Vec<Vec<f64>> {
-            f.part
-                .edges
-                .iter()
+            (0..f.part.edges.len())
                 .map(|e| {
+                    let push = f.pusher(e);
                     let mut acc = 0.0f64;
                     (0..=n)
                         .map(|i| {
-                            acc = acc.max(min_radius_free(
-                                e,
-                                f.part.rho_m,
-                                sign * i as f64 * ANGLE_GRID_RAD,
-                                w,
-                                vb,
-                                mu,
-                            ));
+                            acc = acc.max(push.min_radius_free(sign * i as f64 * ANGLE_GRID_RAD));
                             acc
                         })
                         .collect()
@@ -134,6 +123,7 @@ struct Ctx<'a> {
     r0: f64,
     r_goal: f64,
     bounds: Vec<(f64, f64)>,
+    allow_drift: bool,
 }
 
 /// Interval of theta- for a turn of `psi`: theta- <= 0, theta+ = theta- + psi in
@@ -179,13 +169,12 @@ impl Ctx<'_> {
     fn eval(&self, x: &[f64]) -> (f64, Cons) {
         let turns = self.choices(x);
         let (f, vb) = (self.f, self.f.setup.medium.belt_speed_mps);
-        let mu = f.setup.medium.fence_mu;
         let (mut cost, mut cons) = (0.0, Vec::with_capacity(16 * turns.len() + 8));
         let mut r_prev = self.r0;
         for (k, c) in turns.iter().enumerate() {
             let e = self.seq.edges[k];
-            cost += jog_estimate_s(&f.drive, vb, mu, c.r_before_m - r_prev);
-            jog_constraints(f, self.t, e, r_prev, c.r_before_m, &mut cons);
+            let jog = (e, r_prev, c.r_before_m);
+            cost += jog_constraints(f, self.t, jog, self.allow_drift, &mut cons);
             let to = self.seq.edges[k + 1];
             cost += f.push_time_s(e, c.r_before_m, 0.0, c.theta_plus_rad)
                 + c.drift_m.max(0.0) / vb
@@ -194,8 +183,8 @@ impl Ctx<'_> {
             r_prev = c.r_after_m;
         }
         let goal = *self.seq.edges.last().unwrap_or(&0);
-        cost += jog_estimate_s(&f.drive, vb, mu, self.r_goal - r_prev);
-        jog_constraints(f, self.t, goal, r_prev, self.r_goal, &mut cons);
+        let jog = (goal, r_prev, self.r_goal);
+        cost += jog_constraints(f, self.t, jog, self.allow_drift, &mut cons);
         (cost, cons)
     }
 }
@@ -215,28 +204,47 @@ fn fence_slack(f: &Feeder, p: &Part, edge: usize, r: f64) -> f64 {
 /// Named constraint values (>= 0 feasible).
 pub type Cons = Vec<(&'static str, f64)>;
 
-/// Constraints of a jog on `edge` from `from` to `to` (appended to `cons`).
+/// Constraints of a jog on `edge` from `from` to `to` (appended to `cons`); returns the
+/// jog's estimated time, s. A direction is feasible for the slide jog (no tipping, its
+/// pushes above the minimum radius) or, with `allow_drift`, for the push-and-drift jog
+/// ([`drift_jog_slack`]); the estimate is the slide's where it works, else the
+/// push-and-drift jog's.
 pub fn jog_constraints(
     f: &Feeder,
     t: &RadiusTable,
-    edge: usize,
-    from: f64,
-    to: f64,
+    (edge, from, to): (usize, f64, f64),
+    allow_drift: bool,
     cons: &mut Cons,
-) {
+) -> f64 {
     let (p, mu, tilt) = (&f.part, f.setup.medium.fence_mu, f.drive.jog_tilt_rad);
     let e = &p.edges[edge];
     let scale = p.radius_m;
     let d = (to - from) / scale;
     let slack = 1e-4 / scale;
+    let (drift, drift_s) = if allow_drift && d.abs() > slack {
+        drift_jog_slack(f, t, edge, from, to)
+    } else {
+        (f64::NEG_INFINITY, 0.0)
+    };
+    let (drift_out, drift_in) = if d > 0.0 {
+        (drift, f64::NEG_INFINITY)
+    } else {
+        (f64::NEG_INFINITY, drift)
+    };
     let out = if can_jog(e, mu, true) { 1.0 } else { slack - d };
-    cons.push(("jog: the edge cannot slide outward without tipping", out));
+    cons.push((
+        "jog: the edge cannot slide outward without tipping (nor push-and-drift)",
+        or_drift(out, drift_out),
+    ));
     let inward = if can_jog(e, mu, false) {
         1.0
     } else {
         slack + d
     };
-    cons.push(("jog: the edge cannot slide inward without tipping", inward));
+    cons.push((
+        "jog: the edge cannot slide inward without tipping (nor push-and-drift)",
+        or_drift(inward, drift_in),
+    ));
     cons.push(("jog: contact beyond the fence", fence_slack(f, p, edge, to)));
     // Inward: the tilt up is a stable push at the starting radius; outward: the return
     // from -tilt is a stable push at the final radius (some tilt of [`jog_tilts`]).
@@ -245,17 +253,19 @@ pub fn jog_constraints(
         .iter()
         .map(|&a| (from - t.up(edge, a)) / scale)
         .fold(f64::NEG_INFINITY, f64::max);
+    let up = d.max(up - PLAN_MARGIN);
     cons.push((
-        "jog: radius below the minimum for the inward tilt",
-        d.max(up - PLAN_MARGIN),
+        "jog: radius below the minimum for the inward tilt (and no push-and-drift)",
+        or_drift(up, drift_in),
     ));
     let down = tilts
         .iter()
         .map(|&a| (to - t.down(edge, -a)) / scale)
         .fold(f64::NEG_INFINITY, f64::max);
+    let down = (-d).max(down - PLAN_MARGIN);
     cons.push((
-        "jog: radius below the minimum for the outward return",
-        (-d).max(down - PLAN_MARGIN),
+        "jog: radius below the minimum for the outward return (and no push-and-drift)",
+        or_drift(down, drift_out),
     ));
     let belt = if d.abs() > 1e-4 / scale {
         belt_slack(f, edge, from, -tilt, tilt).min(belt_slack(f, edge, to, -tilt, tilt))
@@ -263,6 +273,73 @@ pub fn jog_constraints(
         1.0
     };
     cons.push(("jog: part off the belt", belt));
+    let slide_ok = out.min(inward).min(up).min(down) >= 0.0;
+    if slide_ok || drift_s == 0.0 {
+        jog_estimate_s(&f.drive, f.setup.medium.belt_speed_mps, mu, to - from)
+    } else {
+        drift_s
+    }
+}
+
+/// A slide-jog constraint value `slide`, relaxed to the push-and-drift jog's `drift` where
+/// the slide fails (where it holds, the slide is what the jog does, so the value stays).
+fn or_drift(slide: f64, drift: f64) -> f64 {
+    if slide >= 0.0 {
+        slide
+    } else {
+        slide.max(drift)
+    }
+}
+
+/// The push-and-drift jog on `edge` from `from` to `to` (m): its slack (>= 0 when it
+/// takes at most 80 % of [`MAX_DRIFT_STEPS`] steps by the sticking closed form at the
+/// largest step angle the radius table allows, and the fence can drop away from the
+/// part) and its estimated time, s.
+pub fn drift_jog_slack(f: &Feeder, t: &RadiusTable, edge: usize, from: f64, to: f64) -> (f64, f64) {
+    let e = &f.part.edges[edge];
+    let outward = to > from;
+    let vb = f.setup.medium.belt_speed_mps;
+    let (u0, u1) = (from - e.a_m, to - e.a_m);
+    let sep = (f.drive.max_rate_radps * u0.min(u1) - 1.3 * vb) / vb;
+    let delta = drift_delta(f, t, edge, from.min(to), outward);
+    if sep < 0.0 || delta <= 0.0 {
+        return (sep.min(-1.0), 0.0);
+    }
+    let steps = (u1 / u0).ln().abs() / (1.0 / delta.cos()).ln();
+    let cap = 0.8 * MAX_DRIFT_STEPS as f64;
+    let per = drift_step_estimate_s(&f.drive, vb, e, f.part.rho_m, 0.5 * (u0 + u1), delta);
+    ((cap - steps) / cap, steps.ceil().max(1.0) * per + SETTLE_S)
+}
+
+/// Largest step angle, rad, of a push-and-drift step on `edge` at radius `r_m` by the
+/// radius table (the table's version of [`super::detail::drift_step_limit_rad`]).
+fn drift_delta(f: &Feeder, t: &RadiusTable, edge: usize, r_m: f64, outward: bool) -> f64 {
+    let mut cap = f
+        .drive
+        .jog_tilt_rad
+        .min(f.drive.max_angle_rad)
+        .min(drift_landing_limit_rad(&f.part, edge));
+    let e = &f.part.edges[edge];
+    cap = cap.min(if outward {
+        drift_rest_limit_rad(e, f.setup.medium.fence_mu)
+    } else {
+        drift_pivot_limit_rad(e)
+    });
+    let n = (cap / ANGLE_GRID_RAD).floor() as usize;
+    let mut best = 0.0;
+    for i in 1..=n {
+        let d = i as f64 * ANGLE_GRID_RAD;
+        let need = if outward {
+            t.down(edge, -d)
+        } else {
+            t.up(edge, d)
+        };
+        if need > r_m {
+            break;
+        }
+        best = d;
+    }
+    best
 }
 
 /// Constraints of one turn (appended to `cons`).
@@ -311,11 +388,11 @@ pub fn turn_constraints(
     cons.push(("turn: the fence touches the part during the drift", clear));
 }
 
-/// The fence's rate at the catch of turn `c` onto `to` (the slowest rate where the push
-/// back has no stable one: the table's constraint reports that).
+/// The fence's rate at the catch of turn `c` onto `to` (the edge's slowest rate where the
+/// push back has no stable one: the table's constraint reports that).
 pub fn catch_rate(f: &Feeder, to: usize, c: &TurnChoice) -> f64 {
     f.catch_rate(to, c.r_after_m, c.theta_minus_rad)
-        .unwrap_or(f.drive.push_rate_radps / RATE_SPAN)
+        .unwrap_or_else(|| f.pusher(to).floor_radps())
 }
 
 /// Smallest distance, m, between the fence segment and the drifting part, sampled over
@@ -359,13 +436,14 @@ pub fn drift_clearance(f: &Feeder, from: usize, c: &TurnChoice, catch: f64) -> f
 }
 
 /// Optimizes the regular turns of `seq` from arrival radius `r0` to goal radius
-/// `r_goal`. When no feasible parameters were found: the most violated constraint.
+/// `r_goal`, jogs by sliding only or, with `allow_drift`, also by push-and-drift. When no
+/// feasible parameters were found: the most violated constraint.
 pub fn solve(
     f: &Feeder,
     t: &RadiusTable,
     seq: &Sequence,
-    r0: f64,
-    r_goal: f64,
+    (r0, r_goal): (f64, f64),
+    allow_drift: bool,
 ) -> Result<Solution, String> {
     let p = &f.part;
     let mut bounds = Vec::new();
@@ -391,6 +469,7 @@ pub fn solve(
         r0,
         r_goal,
         bounds,
+        allow_drift,
     };
     if seq.hops.is_empty() {
         let (cost, cons) = ctx.eval(&[]);
