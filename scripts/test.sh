@@ -70,9 +70,10 @@ cargo build -p dexter-firmware --release --target "$TARGET"
 
 step "static worst-case control steps, from each image as flashed (scripts/wcet.py)"
 python3 scripts/wcet_test.py
-# 297 = the line juggler's 300-instruction goal less the 3 the HIL measurement window adds
-python3 scripts/wcet.py "$FW" dexter_core::control::Controller::step --max-instructions 297
-python3 scripts/wcet.py "$ARM_FW" dexter_core::control::Controller::step --max-instructions 297
+# 296 = the line juggler's 300-instruction goal less the HIL measurement window (3 or 4
+# instructions around the call, as the compiler schedules it: 4 since 2026-11-29)
+python3 scripts/wcet.py "$FW" dexter_core::control::Controller::step --max-instructions 296
+python3 scripts/wcet.py "$ARM_FW" dexter_core::control::Controller::step --max-instructions 296
 # 416 = ArmController's 424-instruction budget less the 8 its HIL measurement window adds
 # (shared/src/arm_control.rs, STEP_INSTRUCTION_BUDGET)
 python3 scripts/wcet.py "$ARM_FW" dexter_core::arm_control::ArmController::step --max-instructions 416
