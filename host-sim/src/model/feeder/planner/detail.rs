@@ -427,6 +427,25 @@ pub fn drift_step(f: &Feeder, st: &State, angle: f64) -> Result<(State, Schedule
     Ok((end, sched))
 }
 
+/// The bound on a push-and-drift step's angle on `edge` before any push is checked, rad:
+/// the jog tilt, the fence's angle range, the landing on the start vertex
+/// ([`drift_landing_limit_rad`]), and outward the rest at -delta
+/// ([`drift_rest_limit_rad`]), inward the turn back onto the edge
+/// ([`drift_pivot_limit_rad`]).
+pub(super) fn drift_step_cap_rad(f: &Feeder, edge: usize, outward: bool) -> f64 {
+    let e = &f.part.edges[edge];
+    let side = if outward {
+        drift_rest_limit_rad(e, f.setup.medium.fence_mu)
+    } else {
+        drift_pivot_limit_rad(e)
+    };
+    f.drive
+        .jog_tilt_rad
+        .min(f.drive.max_angle_rad)
+        .min(drift_landing_limit_rad(&f.part, edge))
+        .min(side)
+}
+
 /// Largest step angle, rad (a multiple of the angle grid, at most the jog tilt), of a
 /// push-and-drift step on `edge` at contact radius `r_m`: outward, the part must rest at
 /// -delta ([`drift_rest_limit_rad`]) and be pushed back from there; inward, pushed from 0
@@ -435,17 +454,7 @@ pub fn drift_step(f: &Feeder, st: &State, angle: f64) -> Result<(State, Schedule
 /// radius the steps see (the start of an outward jog, the end of an inward one). Every
 /// step also lands on the edge's start vertex ([`drift_landing_limit_rad`]).
 pub fn drift_step_limit_rad(f: &Feeder, edge: usize, r_m: f64, outward: bool) -> f64 {
-    let e = &f.part.edges[edge];
-    let mut cap = f
-        .drive
-        .jog_tilt_rad
-        .min(f.drive.max_angle_rad)
-        .min(drift_landing_limit_rad(&f.part, edge));
-    cap = cap.min(if outward {
-        drift_rest_limit_rad(e, f.setup.medium.fence_mu)
-    } else {
-        drift_pivot_limit_rad(e)
-    });
+    let cap = drift_step_cap_rad(f, edge, outward);
     let n = (cap / ANGLE_GRID_RAD).floor() as usize;
     let mut best = 0.0;
     for i in 1..=n {

@@ -24,8 +24,7 @@
 use super::super::geometry::{Pose, Vec2};
 use super::super::part::Part;
 use super::super::primitives::{
-    can_jog, drift_landing_limit_rad, drift_pivot_limit_rad, drift_rest_limit_rad,
-    drift_step_estimate_s, drop_and_catch, jog_estimate_s, jog_tilts, turn_drift_m,
+    can_jog, drift_step_estimate_s, drop_and_catch, jog_estimate_s, jog_tilts, turn_drift_m,
     turn_landing_radius_m, turn_min_drift_s, MAX_DRIFT_STEPS, SETTLE_S,
 };
 use super::super::sim::Schedule;
@@ -314,17 +313,7 @@ pub fn drift_jog_slack(f: &Feeder, t: &RadiusTable, edge: usize, from: f64, to: 
 /// Largest step angle, rad, of a push-and-drift step on `edge` at radius `r_m` by the
 /// radius table (the table's version of [`super::detail::drift_step_limit_rad`]).
 fn drift_delta(f: &Feeder, t: &RadiusTable, edge: usize, r_m: f64, outward: bool) -> f64 {
-    let mut cap = f
-        .drive
-        .jog_tilt_rad
-        .min(f.drive.max_angle_rad)
-        .min(drift_landing_limit_rad(&f.part, edge));
-    let e = &f.part.edges[edge];
-    cap = cap.min(if outward {
-        drift_rest_limit_rad(e, f.setup.medium.fence_mu)
-    } else {
-        drift_pivot_limit_rad(e)
-    });
+    let cap = super::detail::drift_step_cap_rad(f, edge, outward);
     let n = (cap / ANGLE_GRID_RAD).floor() as usize;
     let mut best = 0.0;
     for i in 1..=n {
