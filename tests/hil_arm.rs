@@ -121,9 +121,13 @@ fn a_corrupted_frame_latches_the_safe_state_on_target_and_shadow_alike() {
 fn each_image_refuses_a_kind_it_does_not_host_naming_it() {
     let (scene, p) = planned(examples::THROW);
     let params = scene.controller_params(&p.points_rad, p.segment_s).unwrap();
+    // The arm image first: building it overwrites the default image's path (cargo has one
+    // output path for both), and a struct update's base is evaluated after its fields, so
+    // `..options(0.0)` here could replace the default ELF just built before QEMU boots it.
+    let arm = options(0.0);
     let default = HilOptions {
         firmware_elf: hil::build_firmware().expect("the default image builds"),
-        ..options(0.0)
+        ..arm
     };
     let err = LockStep::<ArmController>::start(params, default)
         .err()
