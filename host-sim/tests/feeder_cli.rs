@@ -107,15 +107,7 @@ fn every_scene_is_fed_to_the_paper_goal_edge_and_ends_flush_on_it() {
     for name in SCENES {
         let trace = dir.join(format!("{name}.csv"));
         let j = json(&["run", &scene(name), "--trace", trace.to_str().unwrap()]);
-        for key in [
-            "goal_edge",
-            "plan",
-            "plan_time_s",
-            "reached_goal",
-            "final_edge",
-            "final_contact_radius_m",
-            "radius_error_m",
-        ] {
+        for key in common::feeder::SUMMARY_KEYS {
             assert!(j.get(key).is_some(), "{name}: no {key}");
         }
         let h = hull(&j);
@@ -250,15 +242,7 @@ fn infeasibility_names_the_limit_and_a_value_just_past_it_works() {
         err.contains("fence too short") && err.contains("feeder.fence.length_m >="),
         "{err}"
     );
-    let need: f64 = err
-        .split(">= ")
-        .nth(1)
-        .unwrap()
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let need = number_after(&err, "length_m >= ");
     let longer = format!("feeder.fence.length_m={}", need + 0.005);
     let j = json(&["run", &sq, near[0], near[1], "--set", &longer]);
     assert_eq!(j["reached_goal"], Value::Bool(true));
@@ -270,15 +254,7 @@ fn infeasibility_names_the_limit_and_a_value_just_past_it_works() {
         err.contains("belt too narrow") && err.contains("feeder.belt.width_m >="),
         "{err}"
     );
-    let need: f64 = err
-        .split("width_m >= ")
-        .nth(1)
-        .unwrap()
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let need = number_after(&err, "width_m >= ");
     let wider = format!("feeder.belt.width_m={}", need + 0.01);
     let j = json(&["run", &sq, x[0], x[1], "--set", &wider]);
     assert_eq!(j["reached_goal"], Value::Bool(true));
@@ -415,4 +391,15 @@ fn noise_perturbs_the_execution_not_the_plan() {
     assert!(v != 0.05 && (v - 0.05).abs() < 0.05 * 0.05 * 6.0, "{v}");
     assert_eq!(f(&clean["actual"]["belt_speed_mps"]), 0.05);
     assert_eq!(noisy["noise"], Value::Bool(true));
+}
+
+/// The number that follows `marker` in `text` (the size an infeasibility message asks for).
+fn number_after(text: &str, marker: &str) -> f64 {
+    let rest = text
+        .split(marker)
+        .nth(1)
+        .unwrap_or_else(|| panic!("no {marker:?}: {text}"));
+    let word = rest.split(' ').next().unwrap();
+    word.parse()
+        .unwrap_or_else(|e| panic!("{word:?} after {marker:?}: {e}"))
 }

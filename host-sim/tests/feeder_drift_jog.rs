@@ -4,6 +4,8 @@
 //! of the edge it arrives on, at a radius below the old fixed-floor minimum (the case of
 //! part 44 of the feeding sweep), now planned and fed.
 
+mod common;
+
 use dexter_sim::model::feeder::execute::{execute, FEED_TOL_M};
 use dexter_sim::model::feeder::geometry::{Pose, Vec2};
 use dexter_sim::model::feeder::part::Part;
@@ -12,35 +14,14 @@ use dexter_sim::model::feeder::planner::detail::{
 };
 use dexter_sim::model::feeder::planner::{plan, Feeder, PlanOptions};
 use dexter_sim::model::feeder::primitives::{
-    can_jog, drift_landing_limit_rad, drift_step_radius_m, landing_sticks, Drive, Primitive,
+    can_jog, drift_landing_limit_rad, drift_step_radius_m, landing_sticks, Primitive,
 };
-use dexter_sim::model::feeder::quasistatic::Medium;
-use dexter_sim::model::feeder::sim::Setup;
 
 fn pts(v: &[(f64, f64)]) -> Vec<Vec2> {
     v.iter().map(|&(x, y)| Vec2::new(x, y)).collect()
 }
 
-/// A 3 m fence over a 6 m belt at 5 cm/s (the feeding sweep's cell), fence friction `mu`.
-fn cell(part: Part, mu: f64) -> Feeder {
-    Feeder {
-        part,
-        setup: Setup {
-            medium: Medium {
-                belt_speed_mps: 0.05,
-                fence_mu: mu,
-            },
-            fence_length_m: 3.0,
-            belt_edge_m: 3.0,
-        },
-        drive: Drive {
-            push_rate_radps: 2.0,
-            max_rate_radps: 6.0,
-            max_angle_rad: 80f64.to_radians(),
-            jog_tilt_rad: (mu.atan() + 15f64.to_radians()).min(80f64.to_radians()),
-        },
-    }
-}
+use common::feeder::cell;
 
 /// The 40 mm square, edge 0 (the bottom, a = b = h = 20 mm) flush at `r_m`.
 fn square_at(mu: f64, r_m: f64) -> (Feeder, State) {

@@ -36,37 +36,21 @@
 //! The smaller draw `feeding_property(16, 12, 4, 5)`, which had 1 of 80 without a plan, now
 //! feeds 80 of 80.
 
+mod common;
+
 use dexter_sim::model::feeder::execute::{execute, sweep_arrivals, SweepSpec, FEED_TOL_M};
 use dexter_sim::model::feeder::geometry::Vec2;
 use dexter_sim::model::feeder::part::Part;
 use dexter_sim::model::feeder::planner::goal::{goal_edge, has_parallel_pair, next_stable};
 use dexter_sim::model::feeder::planner::{plan, Feeder, PlanOptions};
-use dexter_sim::model::feeder::primitives::{Drive, Primitive};
-use dexter_sim::model::feeder::quasistatic::Medium;
-use dexter_sim::model::feeder::sim::Setup;
+use dexter_sim::model::feeder::primitives::Primitive;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
 fn cell(part: Part) -> Feeder {
-    Feeder {
-        part,
-        setup: Setup {
-            medium: Medium {
-                belt_speed_mps: 0.05,
-                fence_mu: 0.3,
-            },
-            fence_length_m: 3.0,
-            belt_edge_m: 3.0,
-        },
-        drive: Drive {
-            push_rate_radps: 2.0,
-            max_rate_radps: 6.0,
-            max_angle_rad: 80f64.to_radians(),
-            jog_tilt_rad: 0.3f64.atan() + 15f64.to_radians(),
-        },
-    }
+    common::feeder::cell(part, 0.3)
 }
 
 /// Random convex polygon: `n` points at random angles on a random ellipse, size ~5 cm.

@@ -1,6 +1,8 @@
 //! The 1JOC primitives, the goal-edge rule, the convergent turn, infeasibility reports,
 //! and the four parts to ship as scenes (issue 16, items 2-4).
 
+mod common;
+
 use dexter_sim::model::feeder::execute::{
     execute, plan_and_execute, sweep, sweep_arrivals, Noise, SweepSpec,
 };
@@ -62,15 +64,7 @@ fn the_four_scene_parts_plan_and_feed_from_random_arrivals() {
         let s = plan_and_execute(&b.feeder, b.arrival, &b.options, None).unwrap();
         assert!(s.reached_goal, "{name}");
         let json = serde_json::to_value(&s).unwrap();
-        for key in [
-            "goal_edge",
-            "plan",
-            "plan_time_s",
-            "reached_goal",
-            "final_edge",
-            "final_contact_radius_m",
-            "radius_error_m",
-        ] {
+        for key in common::feeder::SUMMARY_KEYS {
             assert!(json.get(key).is_some(), "{name}: summary lacks {key}");
         }
         assert!(

@@ -92,6 +92,7 @@ impl SampledSensor {
     /// A sensor sampling at `rate_hz` (> 0) with noise `sigma_m` (m), latency `latency_s`
     /// (s) and quantization `quantization_m` (m, 0 = none), reproducible from `seed`.
     pub fn new(rate_hz: f64, sigma_m: f64, latency_s: f64, quantization_m: f64, seed: u64) -> Self {
+        let slots = ring_slots(latency_s, rate_hz);
         Self {
             period_s: 1.0 / rate_hz,
             latency_s,
@@ -107,8 +108,8 @@ impl SampledSensor {
             rng: rand::rngs::StdRng::seed_from_u64(seed),
             next_index: 0,
             next_time_s: 0.0,
-            pending: vec![(0.0, 0.0); ring_slots(latency_s, rate_hz)].into_boxed_slice(),
-            mask: ring_slots(latency_s, rate_hz) as u64 - 1,
+            pending: vec![(0.0, 0.0); slots].into_boxed_slice(),
+            mask: slots as u64 - 1,
             delivered: 0,
             latest: None,
         }

@@ -2,6 +2,7 @@
 //! directories.
 #![allow(dead_code)]
 
+pub mod feeder;
 pub mod svg;
 
 use std::path::{Path, PathBuf};

@@ -298,6 +298,31 @@ mod tests {
     use super::super::sincos::PolySinCos;
     use super::*;
 
+    /// kappa = 1.1 with the eq. 25 feedback (kappa_e = 0.165) towards a quarter metre of
+    /// apex, on a 0.133 m body.
+    fn law() -> LawConstants {
+        LawConstants {
+            kappa: 1.1,
+            kappa_rate_s: 0.0,
+            kappa_e_s2pm2: 0.165,
+            target_energy_jpkg: 9.81 * 0.25,
+            compensation: 1.0 / 3.0,
+            gravity_mps2: 9.81,
+            l_m: 0.133_33,
+            impact_height_m: 0.0,
+        }
+    }
+
+    /// A tilt drive of +-0.7 rad, 8 rad/s, 300 rad/s^2.
+    fn tilt() -> AxisLimits {
+        AxisLimits {
+            min: -0.7,
+            max: 0.7,
+            velocity_max: 8.0,
+            accel_max: 300.0,
+        }
+    }
+
     fn lim() -> AxisLimits {
         AxisLimits {
             min: -0.1,
@@ -368,22 +393,7 @@ mod tests {
 
     #[test]
     fn targets_follow_kappa_tilt_and_eq25_through_the_tables_geometry() {
-        let law = LawConstants {
-            kappa: 1.1,
-            kappa_rate_s: 0.0,
-            kappa_e_s2pm2: 0.165,
-            target_energy_jpkg: 9.81 * 0.25,
-            compensation: 1.0 / 3.0,
-            gravity_mps2: 9.81,
-            l_m: 0.133_33,
-            impact_height_m: 0.0,
-        };
-        let tilt = AxisLimits {
-            min: -0.7,
-            max: 0.7,
-            velocity_max: 8.0,
-            accel_max: 300.0,
-        };
+        let (law, tilt) = (law(), tilt());
         let th = 0.25f64;
         let b = BodyAtImpact {
             theta_rad: th as f32,
@@ -422,22 +432,7 @@ mod tests {
     }
     #[test]
     fn a_stroke_at_its_speed_limit_gives_the_normal_velocity_of_the_clamped_pivot() {
-        let law = LawConstants {
-            kappa: 1.1,
-            kappa_rate_s: 0.0,
-            kappa_e_s2pm2: 0.165,
-            target_energy_jpkg: 9.81 * 0.25,
-            compensation: 1.0 / 3.0,
-            gravity_mps2: 9.81,
-            l_m: 0.133_33,
-            impact_height_m: 0.0,
-        };
-        let tilt = AxisLimits {
-            min: -0.7,
-            max: 0.7,
-            velocity_max: 8.0,
-            accel_max: 300.0,
-        };
+        let (law, tilt) = (law(), tilt());
         // a slow stroke (0.2 m/s) against a fast fall: eq. 25 asks for more
         let stroke = AxisLimits {
             velocity_max: 0.2,
