@@ -5,10 +5,21 @@
 //! board's UART (`board::mps2_an386::Uart0`, the real driver path) and the semihosting
 //! files here (fast: one host system call per chunk, no emulated UART).
 //!
-//! The semihosting link opens two host paths relative to QEMU's working directory,
-//! [`HOST_TO_DEVICE_PATH`] for reading and [`DEVICE_TO_HOST_PATH`] for writing; the host
-//! makes them FIFOs. defmt logs go to semihosting stdout, a different host file, so logs
-//! and link frames never mix.
+//! The semihosting link opens three host paths relative to QEMU's working directory:
+//! - [`HOST_TO_DEVICE_PATH`], a regular file the host appends frames to. Reading it never
+//!   blocks (at its end `SYS_READ` returns no bytes), so the firmware polls it while it
+//!   waits for a frame and QEMU never sleeps in the host kernel between two control
+//!   steps: the wake-up a blocking read costs on every round trip is gone.
+//! - [`DOORBELL_PATH`], a FIFO: after [`POLLS_BEFORE_SLEEP`] empty polls the firmware
+//!   writes a lone `0x00` on the device-to-host stream (an empty frame, which every
+//!   decoder ignores) and blocks reading one byte here; the host answers each such marker
+//!   with one byte. So a host that is slow to send costs a few hundred microseconds of
+//!   polling, not a core, and a host that is gone ends the run: the FIFO reads end of
+//!   file once no writer is left.
+//! - [`DEVICE_TO_HOST_PATH`], a FIFO the firmware writes frames to.
+//!
+//! defmt logs go to semihosting stdout, a different host file, so logs and link frames
+//! never mix.
 
 use core::ffi::CStr;
 use cortex_m_semihosting::{nr, syscall};
@@ -17,6 +28,13 @@ use cortex_m_semihosting::{nr, syscall};
 pub const HOST_TO_DEVICE_PATH: &CStr = c"dexter-h2d";
 /// Host path the firmware writes frames to.
 pub const DEVICE_TO_HOST_PATH: &CStr = c"dexter-d2h";
+/// Host path of the doorbell FIFO the firmware sleeps on when no frame comes.
+pub const DOORBELL_PATH: &CStr = c"dexter-bell";
+/// Empty polls of [`HOST_TO_DEVICE_PATH`] before the firmware sleeps on the doorbell: in
+/// QEMU 7.2 one poll (a semihosting trap and a host `read`) takes about a microsecond, so
+/// the firmware stays awake for a few hundred microseconds, far longer than the host's
+/// own work between an answer and the next frame.
+pub const POLLS_BEFORE_SLEEP: u32 = 256;
 
 /// Why a link operation failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
@@ -43,6 +61,7 @@ pub struct SemihostingFile {
 
 impl SemihostingFile {
     /// Open `path` with a semihosting `SYS_OPEN` mode (`nr::open::*`).
+    #[inline(never)] // one copy for the link's three files: flash is tight
     pub fn open(path: &CStr, mode: usize) -> Result<Self, LinkError> {
         let len = path.to_bytes().len();
         // Safety: SYS_OPEN reads `len` bytes of the NUL-terminated path.
@@ -60,7 +79,9 @@ impl embedded_io::ErrorType for SemihostingFile {
 }
 
 impl embedded_io::Read for SemihostingFile {
-    /// Blocks in the host until at least one byte (or end of file) is available.
+    /// What one host `read` gives: on a FIFO it blocks until at least one byte (or end of
+    /// file) is available; on a regular file it returns no bytes at its end.
+    #[inline(never)] // one copy for the link's polled file and its doorbell
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
         if buf.is_empty() {
             return Ok(0);
@@ -89,19 +110,21 @@ impl embedded_io::Write for SemihostingFile {
     }
 }
 
-/// The semihosting plant link: one host file per direction.
+/// The semihosting plant link: a polled file in, a doorbell, a FIFO out (module docs).
 pub struct SemihostingLink {
     rx: SemihostingFile,
+    bell: SemihostingFile,
     tx: SemihostingFile,
 }
 
 impl SemihostingLink {
-    /// Open both directions (the read side first; the host opens its FIFOs so that
-    /// neither open blocks).
+    /// Open the three host files (the host made and opened its FIFOs read-write first, so
+    /// no open blocks).
     pub fn open() -> Result<Self, LinkError> {
         let rx = SemihostingFile::open(HOST_TO_DEVICE_PATH, nr::open::R_BINARY)?;
+        let bell = SemihostingFile::open(DOORBELL_PATH, nr::open::R_BINARY)?;
         let tx = SemihostingFile::open(DEVICE_TO_HOST_PATH, nr::open::W_APPEND_BINARY)?;
-        Ok(Self { rx, tx })
+        Ok(Self { rx, bell, tx })
     }
 }
 
@@ -110,8 +133,26 @@ impl embedded_io::ErrorType for SemihostingLink {
 }
 
 impl embedded_io::Read for SemihostingLink {
+    /// Poll for bytes, sleeping on the doorbell between rounds of polls; `Ok(0)` only for
+    /// an empty `buf` or once the host has closed the doorbell.
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
-        self.rx.read(buf)
+        let mut polls: u32 = 0;
+        loop {
+            let n = self.rx.read(buf)?;
+            if n > 0 || buf.is_empty() {
+                return Ok(n);
+            }
+            polls = polls.wrapping_add(1);
+            if polls % POLLS_BEFORE_SLEEP == 0 {
+                // Tell the host this side sleeps (an empty frame), then wait for its ring.
+                if embedded_io::Write::write(&mut self.tx, &[0])? == 0 {
+                    return Err(LinkError::Io);
+                }
+                if self.bell.read(&mut [0])? == 0 {
+                    return Ok(0);
+                }
+            }
+        }
     }
 }
 

@@ -1,5 +1,6 @@
-//! The host end of the byte link to the firmware: two FIFOs for the semihosting link, the
-//! TCP socket QEMU attaches the UART to, or a real board's serial port. Reads wait with
+//! The host end of the byte link to the firmware: the semihosting files
+//! ([`super::semihosting`]), the TCP socket QEMU attaches the UART to, or a real board's
+//! serial port. Reads wait with
 //! `poll(2)` on the calling thread, in slices, so an emulator that died is noticed at once;
 //! one `write` per frame, one `poll` and one `read` per answer, no thread hand-off and no
 //! allocation per frame.
@@ -8,15 +9,14 @@
 //! watch: its port is all the host knows of it).
 
 use super::qemu::{describe_exit, link_err, Qemu, WorkDir};
+use super::semihosting::SemihostingFiles;
 use super::serial::{self, SerialPortOptions};
-use super::{LinkKind, SEMIHOSTING_LINK_FILES};
+use super::LinkKind;
 use crate::controller::ControllerError;
 use serialport::TTYPort;
-use std::fs::{File, OpenOptions};
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::os::fd::{AsRawFd, RawFd};
-use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// How long a wait for the firmware's answer looks without sleeping (see `Link::receive`).
@@ -27,7 +27,7 @@ const READ_CHUNK: usize = 4096;
 
 /// The host end before QEMU starts.
 pub(super) enum Pending {
-    Fifo { h2d: File, d2h: File },
+    Semihosting(SemihostingFiles),
     Tcp(TcpListener),
 }
 
@@ -39,15 +39,11 @@ pub(super) fn prepare(
 ) -> Result<(Pending, Vec<String>), ControllerError> {
     match kind {
         LinkKind::Semihosting => {
-            let h2d = workdir.path().join(SEMIHOSTING_LINK_FILES[0]);
-            let d2h = workdir.path().join(SEMIHOSTING_LINK_FILES[1]);
-            make_fifo(&h2d)?;
-            make_fifo(&d2h)?;
-            let pending = Pending::Fifo {
-                h2d: open_fifo(&h2d)?,
-                d2h: open_fifo(&d2h)?,
-            };
-            Ok((pending, vec!["-serial".into(), "null".into()]))
+            let files = SemihostingFiles::create(workdir)?;
+            Ok((
+                Pending::Semihosting(files),
+                vec!["-serial".into(), "null".into()],
+            ))
         }
         LinkKind::Uart => {
             let listener = TcpListener::bind("127.0.0.1:0")
@@ -69,32 +65,8 @@ pub(super) fn prepare(
     }
 }
 
-fn make_fifo(path: &Path) -> Result<(), ControllerError> {
-    use std::os::unix::ffi::OsStrExt;
-    let c_path = std::ffi::CString::new(path.as_os_str().as_bytes())
-        .map_err(|_| link_err(format!("{} contains a NUL byte", path.display())))?;
-    // Safety: `c_path` is a valid NUL-terminated string for the duration of the call.
-    if unsafe { libc::mkfifo(c_path.as_ptr(), 0o600) } != 0 {
-        return Err(link_err(format!(
-            "mkfifo {} failed: {}",
-            path.display(),
-            std::io::Error::last_os_error()
-        )));
-    }
-    Ok(())
-}
-
-/// Open a FIFO read-write: never blocks, whether or not QEMU has opened its end yet.
-fn open_fifo(path: &Path) -> Result<File, ControllerError> {
-    OpenOptions::new()
-        .read(true)
-        .write(true)
-        .open(path)
-        .map_err(|e| link_err(format!("cannot open {}: {e}", path.display())))
-}
-
 enum Io {
-    Fifo { h2d: File, d2h: File },
+    Semihosting(SemihostingFiles),
     Tcp(TcpStream),
     Serial(TTYPort),
 }
@@ -121,7 +93,7 @@ impl Link {
         timeout: Duration,
     ) -> Result<Link, ControllerError> {
         let io = match pending {
-            Pending::Fifo { h2d, d2h } => Io::Fifo { h2d, d2h },
+            Pending::Semihosting(files) => Io::Semihosting(files),
             Pending::Tcp(listener) => {
                 let stream = accept_with_deadline(&listener, qemu, timeout)?;
                 let _ = stream.set_nodelay(true);
@@ -150,15 +122,24 @@ impl Link {
     /// Write all of `bytes` (one system call for a frame).
     pub(super) fn write_all(&mut self, bytes: &[u8]) -> std::io::Result<()> {
         match &mut self.io {
-            Io::Fifo { h2d, .. } => h2d.write_all(bytes),
+            Io::Semihosting(files) => files.write_all(bytes),
             Io::Tcp(s) => s.write_all(bytes),
             Io::Serial(p) => p.write_all(bytes),
         }
     }
 
+    /// Times the firmware slept on the semihosting doorbell and was rung awake (0 for the
+    /// other links).
+    pub(super) fn doorbell_rings(&self) -> u64 {
+        match &self.io {
+            Io::Semihosting(files) => files.rings(),
+            Io::Tcp(_) | Io::Serial(_) => 0,
+        }
+    }
+
     fn read_fd(&self) -> RawFd {
         match &self.io {
-            Io::Fifo { d2h, .. } => d2h.as_raw_fd(),
+            Io::Semihosting(files) => files.d2h.as_raw_fd(),
             Io::Tcp(s) => s.as_raw_fd(),
             Io::Serial(p) => p.as_raw_fd(),
         }
@@ -196,7 +177,11 @@ impl Link {
             return Ok(Received::Nothing);
         }
         let n = match &mut self.io {
-            Io::Fifo { d2h, .. } => d2h.read(&mut self.buf[..])?,
+            Io::Semihosting(files) => {
+                let n = files.d2h.read(&mut self.buf[..])?;
+                files.notice(&self.buf[..n])?;
+                n
+            }
             Io::Tcp(s) => s.read(&mut self.buf[..])?,
             Io::Serial(p) => p.read(&mut self.buf[..])?,
         };

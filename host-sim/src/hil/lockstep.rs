@@ -333,6 +333,12 @@ impl<C: Wire> LockStep<C> {
         self.counters.link
     }
 
+    /// Times the firmware found no frame for a while, slept on the semihosting link's
+    /// doorbell and was rung awake (`hil::semihosting`); 0 on the UART and a board.
+    pub fn doorbell_rings(&self) -> u64 {
+        self.link.doorbell_rings()
+    }
+
     /// The raw defmt log so far (semihosting stdout); decode with the firmware ELF. Empty
     /// for a board (it logs over RTT: probe-rs prints it).
     pub fn firmware_log(&self) -> Vec<u8> {

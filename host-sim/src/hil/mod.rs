@@ -27,17 +27,21 @@
 //! ## Modules
 //! - [`qemu`]: the QEMU process (toolchain checks, building the firmware, the private
 //!   working directory, exit status, the defmt log);
-//! - `link`: the host end of the byte link: semihosting FIFOs or the UART's TCP socket,
-//!   read with `poll(2)` on the calling thread (no reader thread, no allocation per frame);
+//! - `link`: the host end of the byte link: the semihosting files or the UART's TCP
+//!   socket, read with `poll(2)` on the calling thread (no reader thread, no allocation
+//!   per frame);
+//! - `semihosting`: the semihosting link's files, its doorbell and the frame file's bound;
 //! - `inject`: byte corruption, and the independent prediction of which frames reach the
 //!   firmware intact;
 //! - `lockstep`: [`LockStep`];
 //! - `report`: counters, [`HilReport`](crate::controller::HilReport), [`LinkCounts`].
 //!
 //! ## Links
-//! - [`LinkKind::Semihosting`]: two FIFOs in a private working directory that the firmware
-//!   opens with semihosting `SYS_OPEN` (`dexter-h2d`, `dexter-d2h`); fast (one host system
-//!   call per frame).
+//! - [`LinkKind::Semihosting`]: files in a private working directory that the firmware
+//!   opens with semihosting `SYS_OPEN` ([`SEMIHOSTING_LINK_FILES`]): frames in through a
+//!   regular file the firmware polls (QEMU never sleeps between steps), frames out through
+//!   a FIFO, and a doorbell FIFO the firmware sleeps on when no frame comes for a while;
+//!   fast (one host system call per frame each way).
 //! - [`LinkKind::Uart`]: the board's CMSDK UART0 (the real driver path, receive interrupt
 //!   into a ring buffer), attached by QEMU to a loopback TCP socket this process listens on.
 //!
@@ -77,6 +81,7 @@ mod link;
 mod lockstep;
 pub mod qemu;
 mod report;
+mod semihosting;
 pub mod serial;
 
 pub use lockstep::LockStep;
@@ -103,13 +108,15 @@ pub const CORRUPTION_SEED: u64 = 0x00de_c7e2_5eed;
 /// Periods without a valid frame before the firmware answers with its safe command
 /// (must equal `dexter_firmware::server::LOCKSTEP_TIMEOUT_PERIODS`).
 pub const LOCKSTEP_TIMEOUT_PERIODS: u32 = 1;
-/// File names of the semihosting link inside QEMU's working directory.
-pub const SEMIHOSTING_LINK_FILES: [&str; 2] = ["dexter-h2d", "dexter-d2h"];
+/// File names of the semihosting link inside QEMU's working directory: frames in (a
+/// regular file the firmware polls), the doorbell FIFO, frames out (a FIFO); the
+/// firmware's `link::{HOST_TO_DEVICE_PATH, DOORBELL_PATH, DEVICE_TO_HOST_PATH}`.
+pub const SEMIHOSTING_LINK_FILES: [&str; 3] = ["dexter-h2d", "dexter-bell", "dexter-d2h"];
 
 /// Which plant link connects the host and the firmware.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LinkKind {
-    /// Semihosting file I/O on two FIFOs (fast).
+    /// Semihosting file I/O: a polled frame file in, a FIFO out (fast).
     #[default]
     Semihosting,
     /// The board's UART0 on a loopback TCP socket (the real driver path; slow in QEMU).
