@@ -481,6 +481,46 @@ fn the_link_check_controller_runs_through_the_same_driver() {
     assert!(summary.stack_used_bytes > 0);
 }
 
+/// The semihosting link's firmware polls for frames and, after a few hundred microseconds
+/// without one, sleeps on a doorbell FIFO (`firmware/src/link.rs`): a host that pauses
+/// between steps must find it asleep, not spinning, and ring it awake for every step. A
+/// firmware that never sleeps fails the CPU bound and rings nothing; a host that does not
+/// ring the doorbell times out on the first step after a pause.
+#[test]
+fn a_firmware_waiting_on_a_slow_host_sleeps_on_the_doorbell_and_wakes_for_each_frame() {
+    let params = EchoParams { gain: 3.0 };
+    let mut hil = LockStep::<Echo>::start(params, options(LinkKind::Semihosting)).expect("start");
+    let qemu = hil.qemu_pid().to_string();
+    let pauses = 10u32;
+    let pause = Duration::from_millis(30);
+    let rings_before = hil.doorbell_rings();
+    let cpu0 = cpu_of(&qemu);
+    for seq in 0..pauses {
+        std::thread::sleep(pause);
+        let value = seq as f32 + 0.5;
+        let out = hil
+            .step(&EchoFrame { seq, value })
+            .expect("answered after a pause");
+        assert_eq!(out.command.seq, seq);
+        assert_eq!(out.command.value.to_bits(), (3.0 * value).to_bits());
+    }
+    let cpu1 = cpu_of(&qemu);
+    let rings = hil.doorbell_rings() - rings_before;
+    let qemu_cpu_s = (cpu1.0 + cpu1.1) - (cpu0.0 + cpu0.1);
+    let paused_s = pause.as_secs_f64() * f64::from(pauses);
+    assert!(
+        rings >= u64::from(pauses),
+        "the firmware slept {rings} times in {pauses} pauses of {pause:?}"
+    );
+    assert!(
+        qemu_cpu_s < 0.5 * paused_s,
+        "QEMU used {qemu_cpu_s:.3} s of CPU while the host paused {paused_s:.3} s"
+    );
+    let report = hil.finish().expect("clean end");
+    assert_eq!(report.sil_mismatches, 0);
+    assert_eq!(report.link_errors, 0);
+}
+
 // ---- golden files, budgets and the documents generated from them ---------------------------
 
 fn expected_dir() -> PathBuf {

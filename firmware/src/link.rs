@@ -143,7 +143,7 @@ impl embedded_io::Read for SemihostingLink {
                 return Ok(n);
             }
             polls = polls.wrapping_add(1);
-            if polls % POLLS_BEFORE_SLEEP == 0 {
+            if polls.is_multiple_of(POLLS_BEFORE_SLEEP) {
                 // Tell the host this side sleeps (an empty frame), then wait for its ring.
                 if embedded_io::Write::write(&mut self.tx, &[0])? == 0 {
                     return Err(LinkError::Io);

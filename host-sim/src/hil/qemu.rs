@@ -194,7 +194,7 @@ pub(super) struct Qemu {
     log: Arc<Mutex<Vec<u8>>>,
     stderr: Arc<Mutex<Vec<u8>>>,
     collectors: Vec<JoinHandle<()>>,
-    /// Dropped after the child is gone (the FIFOs live here).
+    /// Dropped after the child is gone (the link files live here).
     _workdir: WorkDir,
 }
 

@@ -170,7 +170,11 @@ mod tests {
         }
         let path = dir.path().join(FILES[0]);
         let meta = std::fs::metadata(&path).unwrap();
-        assert_eq!(meta.len(), total / 40 * 40, "the apparent size is every byte");
+        assert_eq!(
+            meta.len(),
+            total / 40 * 40,
+            "the apparent size is every byte"
+        );
         let on_disk = meta.blocks() * 512;
         assert!(
             on_disk <= PUNCH_EVERY + KEEP + BLOCK,
