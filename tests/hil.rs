@@ -491,8 +491,8 @@ fn a_firmware_waiting_on_a_slow_host_sleeps_on_the_doorbell_and_wakes_for_each_f
     let params = EchoParams { gain: 3.0 };
     let mut hil = LockStep::<Echo>::start(params, options(LinkKind::Semihosting)).expect("start");
     let qemu = hil.qemu_pid().to_string();
-    let pauses = 10u32;
-    let pause = Duration::from_millis(30);
+    let pauses = 6u32;
+    let pause = Duration::from_millis(100);
     let rings_before = hil.doorbell_rings();
     let cpu0 = cpu_of(&qemu);
     for seq in 0..pauses {
