@@ -51,7 +51,8 @@ fn bracket(s: &ContactInput, g: f64, l: f64) -> (f64, f64) {
 
 /// Eq. 7's f in f64.
 fn f(s: &ContactInput, g: f64, l: f64, t: f64) -> f64 {
-    f64::from(s.height_above_m) + f64::from(s.y_dot_mps) * t - 0.5 * g * t * t
+    f64::from(s.height_above_m) + f64::from(s.y_dot_mps) * t
+        - 0.5 * g * t * t
         - l * (f64::from(s.theta_rad) + f64::from(s.theta_dot_radps) * t).cos()
 }
 
@@ -80,7 +81,11 @@ fn no_contact_ahead_or_no_finite_time_gives_none() {
         // finite, but y'^2 overflows f32
         input(0.3, 1e20, 0.0, 0.0),
     ] {
-        assert_eq!(predict_contact::<PolySinCos>(&geo, &s, f32::NAN, 4), None, "{s:?}");
+        assert_eq!(
+            predict_contact::<PolySinCos>(&geo, &s, f32::NAN, 4),
+            None,
+            "{s:?}"
+        );
     }
 }
 

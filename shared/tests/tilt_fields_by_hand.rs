@@ -43,11 +43,19 @@ fn of_several_bad_values_the_first_is_reported() {
     let n = field_count();
     let values: Vec<u32> = (0..n as u32).map(|i| 70_000 + i).collect();
     let first_bad = (1..=n)
-        .find(|&k| !read(&values[..k]).unwrap_err().to_string().starts_with("invalid length"))
+        .find(|&k| {
+            !read(&values[..k])
+                .unwrap_err()
+                .to_string()
+                .starts_with("invalid length")
+        })
         .expect("some field rejects 70 000");
     assert!(first_bad < n, "the last field is not the only small one");
     let first = read(&values[..first_bad]).unwrap_err().to_string();
-    assert!(first.contains(&format!("`{}`", values[first_bad - 1])), "{first}");
+    assert!(
+        first.contains(&format!("`{}`", values[first_bad - 1])),
+        "{first}"
+    );
     // the whole sequence (more bad values after the first) and a short one after the first
     // bad value both report that first error
     assert_eq!(read(&values).unwrap_err().to_string(), first);
