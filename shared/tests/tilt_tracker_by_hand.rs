@@ -635,3 +635,31 @@ fn a_far_reference_and_a_distant_impact_track_without_a_fault() {
         assert!(cmd.impact_in_s > 3.9 && cmd.stroke_ref_m > 9e37, "{cmd:?}");
     }
 }
+
+/// Sequence numbers move forward with wrapping, as the line juggler's
+/// (`sequence_numbers_move_forward_with_wrapping` in `control.rs`): a frame up to
+/// u32::MAX / 2 - 1 ahead is new, one exactly u32::MAX / 2 ahead counts as old, and its
+/// repeats go stale after `stale_limit_steps` (5).
+#[test]
+fn sequence_numbers_move_forward_with_wrapping_up_to_half_the_range() {
+    let mut c = TiltController::new(TiltParams::default()).unwrap();
+    let body = [0.0, 0.3, 0.1, 0.0, 0.0, 0.0];
+    let mut fault_at = |seq: u32| c.step(&frame(seq, body, [0.0; 4])).fault;
+    assert_eq!(fault_at(u32::MAX - 1), Fault::None);
+    // wraps forward: u32::MAX, 0, 1 are new samples (the stale count never grows)
+    for seq in [u32::MAX, 0, 1] {
+        for _ in 0..6 {
+            assert_eq!(fault_at(seq), Fault::None, "{seq}");
+        }
+    }
+    let far = 1u32.wrapping_add(u32::MAX / 2 - 1);
+    for _ in 0..6 {
+        assert_eq!(fault_at(far), Fault::None, "new, then 5 repeats");
+    }
+    let far = far.wrapping_add(1);
+    assert_eq!(fault_at(far), Fault::None);
+    let beyond = far.wrapping_add(u32::MAX / 2);
+    let faults: Vec<Fault> = (0..6).map(|_| fault_at(beyond)).collect();
+    assert_eq!(faults[..5], [Fault::None; 5], "5 repeats are tolerated");
+    assert_eq!(faults[5], Fault::Stale);
+}
