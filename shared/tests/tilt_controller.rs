@@ -8,19 +8,8 @@ use dexter_core::tilt::{BodyState, EnergyFeedback};
 use dexter_core::tilt_control::{PlanStatus, TiltCommand, TiltController, TiltFrame, TiltParams};
 use proptest::prelude::*;
 
-const G: f64 = 9.81;
-
-/// The body in flight, f64 truth: (x, y, theta, x', y', theta') at t.
-fn flight(s0: [f64; 6], t: f64) -> [f64; 6] {
-    [
-        s0[0] + s0[3] * t,
-        s0[1] + s0[4] * t - 0.5 * G * t * t,
-        s0[2] + s0[5] * t,
-        s0[3],
-        s0[4] - G * t,
-        s0[5],
-    ]
-}
+mod common;
+use common::tilt::{flight, frame_at, true_contact, G};
 
 /// Perfect camera (no latency), exact table axes (double integrators under the held
 /// commands, f64): step the controller until its plan is committed and the predicted impact
@@ -35,16 +24,7 @@ fn run_to_predicted_impact(params: TiltParams, s0: [f64; 6]) -> ([f64; 4], f64, 
     for k in 0..400u32 {
         let t = f64::from(k) * dt;
         let b = flight(s0, t);
-        let frame = TiltFrame {
-            seq: k,
-            body_x_m: b[0] as f32,
-            body_y_m: b[1] as f32,
-            body_theta_rad: b[2] as f32,
-            table_angle_rad: table[0] as f32,
-            table_rate_radps: table[1] as f32,
-            table_height_m: table[2] as f32,
-            table_velocity_mps: table[3] as f32,
-        };
+        let frame = frame_at(k, b, table);
         let cmd = c.step(&frame);
         cmds.push(cmd);
         if cmd.plan == PlanStatus::Committed {
@@ -75,29 +55,6 @@ fn run_to_predicted_impact(params: TiltParams, s0: [f64; 6]) -> ([f64; 4], f64, 
         ];
     }
     panic!("no committed plan came due");
-}
-
-/// The descending contact of the true flight with y_imp (eq. 7), by a fine scan and
-/// bisection in f64.
-fn true_contact(s0: [f64; 6], l: f64, y_imp: f64) -> f64 {
-    let f = |t: f64| {
-        let b = flight(s0, t);
-        b[1] - l * b[2].cos() - y_imp
-    };
-    let mut t = 0.0;
-    while f(t + 1e-5) > 0.0 {
-        t += 1e-5;
-    }
-    let (mut lo, mut hi) = (t, t + 1e-5);
-    for _ in 0..100 {
-        let m = 0.5 * (lo + hi);
-        if f(m) > 0.0 {
-            lo = m;
-        } else {
-            hi = m;
-        }
-    }
-    hi
 }
 
 #[test]

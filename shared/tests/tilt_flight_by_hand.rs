@@ -12,7 +12,9 @@ use dexter_core::tilt_control::flight::{
     BodyFlight, FlightEstimator, FlightTuning, FlightUpdate, ImpactModel, PlannedImpact,
 };
 
-const G: f64 = 9.81;
+mod common;
+use common::tilt::{flight, G};
+
 const DT: f32 = 0.002;
 const RHO: f64 = 0.094_28;
 const L: f64 = 0.133_33;
@@ -29,18 +31,6 @@ fn estimator(latency_s: f32) -> FlightEstimator {
         restitution: E as f32,
     };
     FlightEstimator::new(tuning, model, DT, G as f32).unwrap()
-}
-
-/// Ballistic flight, f64 truth: (x, y, theta, x', y', theta') at `t` from `s0` at 0.
-fn flight(s0: [f64; 6], t: f64) -> [f64; 6] {
-    [
-        s0[0] + s0[3] * t,
-        s0[1] + s0[4] * t - 0.5 * G * t * t,
-        s0[2] + s0[5] * t,
-        s0[3],
-        s0[4] - G * t,
-        s0[5],
-    ]
 }
 
 /// The camera's pose of `s`, f32.

@@ -17,56 +17,8 @@ use dexter_core::protocol::{Fault, Mode};
 use dexter_core::tilt_control::flight::FlightTuning;
 use dexter_core::tilt_control::{PlanStatus, TiltCommand, TiltController, TiltFrame, TiltParams};
 
-const G: f64 = 9.81;
-
-/// The body in flight, f64 truth: (x, y, theta, x', y', theta') at t (t < 0: before).
-fn flight(s0: [f64; 6], t: f64) -> [f64; 6] {
-    [
-        s0[0] + s0[3] * t,
-        s0[1] + s0[4] * t - 0.5 * G * t * t,
-        s0[2] + s0[5] * t,
-        s0[3],
-        s0[4] - G * t,
-        s0[5],
-    ]
-}
-
-/// A frame with the body at `b` and the table at (angle, rate, height, velocity).
-fn frame(seq: u32, b: [f64; 6], table: [f64; 4]) -> TiltFrame {
-    TiltFrame {
-        seq,
-        body_x_m: b[0] as f32,
-        body_y_m: b[1] as f32,
-        body_theta_rad: b[2] as f32,
-        table_angle_rad: table[0] as f32,
-        table_rate_radps: table[1] as f32,
-        table_height_m: table[2] as f32,
-        table_velocity_mps: table[3] as f32,
-    }
-}
-
-/// The descending contact of eq. 7 (the contact point y - l cos theta reaches `y_imp`) of
-/// the true flight, by a 10 us scan and bisection in f64.
-fn true_contact(s0: [f64; 6], l: f64, y_imp: f64) -> f64 {
-    let f = |t: f64| {
-        let b = flight(s0, t);
-        b[1] - l * b[2].cos() - y_imp
-    };
-    let mut t = 0.0;
-    while f(t + 1e-5) > 0.0 {
-        t += 1e-5;
-    }
-    let (mut lo, mut hi) = (t, t + 1e-5);
-    for _ in 0..100 {
-        let m = 0.5 * (lo + hi);
-        if f(m) > 0.0 {
-            lo = m;
-        } else {
-            hi = m;
-        }
-    }
-    hi
-}
+mod common;
+use common::tilt::{flight, frame_at, true_contact};
 
 fn close(got: f32, want: f64, tol: f64, what: &str) {
     assert!(
@@ -84,7 +36,7 @@ fn the_safe_state_dead_reckons_the_table_under_its_braking() {
     let dt = f64::from(p.dt_s);
     let mut c = TiltController::new(p).unwrap();
     // measured: tilt 0.2 rad at 3 rad/s, stroke 0.05 m at -1.5 m/s
-    let f = frame(0, [0.0, 0.3, 0.1, 0.0, 0.0, 0.0], [0.2, 3.0, 0.05, -1.5]);
+    let f = frame_at(0, [0.0, 0.3, 0.1, 0.0, 0.0, 0.0], [0.2, 3.0, 0.05, -1.5]);
     assert_eq!(c.step(&f).mode, Mode::Hold);
     let mut axes = [
         (0.2f64, 3.0f64, f64::from(p.tilt.accel_max_radps2)),
@@ -170,7 +122,7 @@ fn the_plausible_box_is_each_travel_plus_five_percent_on_both_sides() {
     let mut seq = 0u32;
     let mut fault_of = |angle: f64, height: f64, y: f64| {
         seq += 1;
-        c.step(&frame(
+        c.step(&frame_at(
             seq,
             [0.0, y, 0.1, 0.0, 0.0, 0.0],
             [angle, 0.0, height, 0.0],
@@ -288,7 +240,7 @@ fn missed_impact_run() -> (Vec<TiltCommand>, usize) {
             }
             _ => [0.0; 4],
         };
-        let cmd = c.step(&frame(last_fresh as u32, body, table));
+        let cmd = c.step(&frame_at(last_fresh as u32, body, table));
         assert_eq!(cmd.fault, Fault::None, "period {k}: {cmd:?}");
         if entry.is_none() && cmd.mode == Mode::Track {
             entry = Some(k);
@@ -402,7 +354,13 @@ fn no_contact_ahead_is_reported_unreachable_from_the_first_bracket() {
     // at its apex 20 cm below the impact height (l = 13.3 cm)
     let s0 = [0.0, -0.2, 0.1, 0.0, 0.0, 0.0];
     let cmds: Vec<TiltCommand> = (0..24u32)
-        .map(|k| c.step(&frame(k, flight(s0, f64::from(k) * dt - latency), [0.0; 4])))
+        .map(|k| {
+            c.step(&frame_at(
+                k,
+                flight(s0, f64::from(k) * dt - latency),
+                [0.0; 4],
+            ))
+        })
         .collect();
     let e = cmds.iter().position(|c| c.mode == Mode::Track).unwrap();
     assert_eq!(e, 7);
@@ -430,7 +388,7 @@ fn tracked_run(p: TiltParams, s0: [f64; 6], periods: u32) -> (Vec<TiltCommand>, 
     let mut table = [0.0f64; 4];
     let mut cmds = Vec::new();
     for k in 0..periods {
-        let cmd = c.step(&frame(k, flight(s0, f64::from(k) * dt), table));
+        let cmd = c.step(&frame_at(k, flight(s0, f64::from(k) * dt), table));
         let (ua, uh) = (
             f64::from(cmd.tilt_accel_radps2),
             f64::from(cmd.stroke_accel_mps2),
@@ -527,7 +485,7 @@ fn the_getters_report_the_estimate_the_target_and_the_same_step() {
     let mut table = [0.0f64; 4];
     for k in 0..(t_c / dt) as u32 - 2 {
         let b = flight(s0, f64::from(k) * dt);
-        let f = frame(k, b, table);
+        let f = frame_at(k, b, table);
         let cmd = c.step(&f);
         let (ua, uh) = (
             f64::from(cmd.tilt_accel_radps2),
@@ -592,7 +550,7 @@ fn large_finite_references_hold_without_a_fault() {
     p.stroke.home_m = f32::MAX;
     let mut c = TiltController::new(p).unwrap();
     for k in 0..3u32 {
-        let cmd = c.step(&frame(
+        let cmd = c.step(&frame_at(
             k,
             [0.0, 0.3, 0.1, 0.0, 0.0, 0.0],
             [1.2, 0.0, 0.0, 0.0],
@@ -621,7 +579,7 @@ fn a_far_reference_and_a_distant_impact_track_without_a_fault() {
     let cmds: Vec<TiltCommand> = (0..24u32)
         .map(|k| {
             let b = flight(s0, f64::from(k) * dt - latency);
-            c.step(&frame(k, b, [0.0, 0.0, 1e38, 0.0]))
+            c.step(&frame_at(k, b, [0.0, 0.0, 1e38, 0.0]))
         })
         .collect();
     for (k, cmd) in cmds.iter().enumerate() {
@@ -644,7 +602,7 @@ fn a_far_reference_and_a_distant_impact_track_without_a_fault() {
 fn sequence_numbers_move_forward_with_wrapping_up_to_half_the_range() {
     let mut c = TiltController::new(TiltParams::default()).unwrap();
     let body = [0.0, 0.3, 0.1, 0.0, 0.0, 0.0];
-    let mut fault_at = |seq: u32| c.step(&frame(seq, body, [0.0; 4])).fault;
+    let mut fault_at = |seq: u32| c.step(&frame_at(seq, body, [0.0; 4])).fault;
     assert_eq!(fault_at(u32::MAX - 1), Fault::None);
     // wraps forward: u32::MAX, 0, 1 are new samples (the stale count never grows)
     for seq in [u32::MAX, 0, 1] {
