@@ -9,7 +9,7 @@ use dexter_core::tilt_control::{PlanStatus, TiltCommand, TiltController, TiltFra
 use proptest::prelude::*;
 
 mod common;
-use common::tilt::{flight, frame_at, true_contact, G};
+use common::tilt::{flight, frame_at, table_after, true_contact, G};
 
 /// Perfect camera (no latency), exact table axes (double integrators under the held
 /// commands, f64): step the controller until its plan is committed and the predicted impact
@@ -30,29 +30,15 @@ fn run_to_predicted_impact(params: TiltParams, s0: [f64; 6]) -> ([f64; 4], f64, 
         if cmd.plan == PlanStatus::Committed {
             predicted = Some(t + f64::from(cmd.impact_in_s));
         }
-        let (ua, uh) = (
-            f64::from(cmd.tilt_accel_radps2),
-            f64::from(cmd.stroke_accel_mps2),
-        );
         // the table at the predicted time, if it falls in this period
         if let Some(tp) = predicted {
             if tp >= t && tp < t + dt {
                 let s = tp - t;
-                let at = [
-                    table[0] + table[1] * s + 0.5 * ua * s * s,
-                    table[1] + ua * s,
-                    table[2] + table[3] * s + 0.5 * uh * s * s,
-                    table[3] + uh * s,
-                ];
+                let at = table_after(table, &cmd, s);
                 return (at, tp, cmds);
             }
         }
-        table = [
-            table[0] + table[1] * dt + 0.5 * ua * dt * dt,
-            table[1] + ua * dt,
-            table[2] + table[3] * dt + 0.5 * uh * dt * dt,
-            table[3] + uh * dt,
-        ];
+        table = table_after(table, &cmd, dt);
     }
     panic!("no committed plan came due");
 }

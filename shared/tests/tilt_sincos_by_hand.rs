@@ -16,7 +16,7 @@ use dexter_core::tilt_control::sincos::{BackendSinCos, PolySinCos, SeparatePolyS
 use dexter_core::tilt_control::{TiltController, TiltControllerWith, TiltParams};
 
 mod common;
-use common::tilt::{flight, frame_at};
+use common::tilt::{flight, frame_at, table_after};
 
 /// The largest |sin - f64 sin| and |cos - f64 cos| of source `T` at `n + 1` angles evenly
 /// spread over [-r, r] rad (the angle itself rounded to f32 first, so only the source's
@@ -152,16 +152,7 @@ fn the_default_step_and_safe_of_a_source_outside_the_core_run_the_controller() {
         assert_eq!(got.seq(), k + 1);
         tracked |= got.mode == Mode::Track;
         planned |= got.impact_in_s > 0.0;
-        let (ua, uh) = (
-            f64::from(got.tilt_accel_radps2),
-            f64::from(got.stroke_accel_mps2),
-        );
-        table = [
-            table[0] + table[1] * dt + 0.5 * ua * dt * dt,
-            table[1] + ua * dt,
-            table[2] + table[3] * dt + 0.5 * uh * dt * dt,
-            table[3] + uh * dt,
-        ];
+        table = table_after(table, &got, dt);
     }
     assert!(tracked && planned, "the run reaches Track with a plan");
     let want = FixedRate::safe(&mut shipped, 4321, Fault::Stale);

@@ -18,7 +18,7 @@ use dexter_core::tilt_control::flight::FlightTuning;
 use dexter_core::tilt_control::{PlanStatus, TiltCommand, TiltController, TiltFrame, TiltParams};
 
 mod common;
-use common::tilt::{flight, frame_at, true_contact};
+use common::tilt::{flight, frame_at, table_after, true_contact};
 
 fn close(got: f32, want: f64, tol: f64, what: &str) {
     assert!(
@@ -389,16 +389,7 @@ fn tracked_run(p: TiltParams, s0: [f64; 6], periods: u32) -> (Vec<TiltCommand>, 
     let mut cmds = Vec::new();
     for k in 0..periods {
         let cmd = c.step(&frame_at(k, flight(s0, f64::from(k) * dt), table));
-        let (ua, uh) = (
-            f64::from(cmd.tilt_accel_radps2),
-            f64::from(cmd.stroke_accel_mps2),
-        );
-        table = [
-            table[0] + table[1] * dt + 0.5 * ua * dt * dt,
-            table[1] + ua * dt,
-            table[2] + table[3] * dt + 0.5 * uh * dt * dt,
-            table[3] + uh * dt,
-        ];
+        table = table_after(table, &cmd, dt);
         cmds.push(cmd);
     }
     (cmds, c)
@@ -487,16 +478,7 @@ fn the_getters_report_the_estimate_the_target_and_the_same_step() {
         let b = flight(s0, f64::from(k) * dt);
         let f = frame_at(k, b, table);
         let cmd = c.step(&f);
-        let (ua, uh) = (
-            f64::from(cmd.tilt_accel_radps2),
-            f64::from(cmd.stroke_accel_mps2),
-        );
-        table = [
-            table[0] + table[1] * dt + 0.5 * ua * dt * dt,
-            table[1] + ua * dt,
-            table[2] + table[3] * dt + 0.5 * uh * dt * dt,
-            table[3] + uh * dt,
-        ];
+        table = table_after(table, &cmd, dt);
         assert!(
             cmd.bit_identical(&FixedRate::step(&mut view, &f)),
             "period {k}"

@@ -1,7 +1,8 @@
 //! The kappa-tilt tests' f64 truth: the body's ballistic flight, its descending contact with
-//! the table (Zumel & Erdmann eq. 7), and the frame a perfect camera and table sensors send.
+//! the table (Zumel & Erdmann eq. 7), and the frame a perfect camera and table sensors send, and the table's
+//! exact axes under a held command.
 
-use dexter_core::tilt_control::TiltFrame;
+use dexter_core::tilt_control::{TiltCommand, TiltFrame};
 
 /// Gravity of the tilt tests, m/s^2 (`TiltParams::default()`'s).
 pub const G: f64 = 9.81;
@@ -32,6 +33,21 @@ pub fn frame_at(seq: u32, b: [f64; 6], table: [f64; 4]) -> TiltFrame {
         table_height_m: table[2] as f32,
         table_velocity_mps: table[3] as f32,
     }
+}
+
+/// The table's exact axes (angle rad, rate rad/s, height m, velocity m/s) `s` seconds on,
+/// as double integrators under the command's held accelerations.
+pub fn table_after(table: [f64; 4], cmd: &TiltCommand, s: f64) -> [f64; 4] {
+    let (ua, uh) = (
+        f64::from(cmd.tilt_accel_radps2),
+        f64::from(cmd.stroke_accel_mps2),
+    );
+    [
+        table[0] + table[1] * s + 0.5 * ua * s * s,
+        table[1] + ua * s,
+        table[2] + table[3] * s + 0.5 * uh * s * s,
+        table[3] + uh * s,
+    ]
 }
 
 /// The descending contact of eq. 7 (the contact point y - l cos theta reaches `y_imp` m)
