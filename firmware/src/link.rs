@@ -157,7 +157,8 @@ impl embedded_io::Read for SemihostingLink {
 }
 
 impl embedded_io::ReadReady for SemihostingLink {
-    /// Semihosting has no poll: reads block in the host, so this always says ready.
+    /// Semihosting has no poll: a read waits for bytes itself (polling, then the
+    /// doorbell), so this always says ready.
     fn read_ready(&mut self) -> Result<bool, LinkError> {
         Ok(true)
     }
