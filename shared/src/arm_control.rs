@@ -45,11 +45,10 @@
 //! allocates nothing and never panics.
 
 use crate::bspline::{Knots, SplineSample};
-use crate::fixed_rate::{FixedRate, Reply};
+use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
 use crate::math::{cos_poly_f32, Real};
 use crate::mirror::PaddleReference;
 use crate::params::{finite, non_negative, positive, ParamError};
-use crate::protocol::{Fault, Mode, Telemetry};
 use crate::state::PaddleState;
 use crate::track::{PaddleLimits, Tracker};
 use serde::{Deserialize, Serialize};

@@ -117,11 +117,10 @@ mod params;
 pub use detect::{BottomSearch, Debounce};
 pub use params::{HopParams, HopThrust, MAX_DEBOUNCE_SAMPLES, MAX_LATENCY_STEPS, MAX_THRUST_STEPS};
 
-use crate::fixed_rate::{FixedRate, Reply};
+use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
 use crate::hop::{EnergyServoThrust, StancePhase};
 use crate::math::Real;
 use crate::params::ParamError;
-use crate::protocol::{Fault, Mode, Telemetry};
 use serde::{Deserialize, Serialize};
 
 /// One sample of the hopper, sent to the controller every control period. Its serde form

@@ -85,10 +85,9 @@ pub mod flight;
 pub mod plan;
 pub mod sincos;
 
-use crate::fixed_rate::{FixedRate, Reply};
+use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
 use crate::math::Real;
 use crate::params::ParamError;
-use crate::protocol::{Fault, Mode, Telemetry};
 use crate::state::PaddleState;
 use crate::tilt::TiltLaw;
 use axis::Axis;
@@ -1231,35 +1230,6 @@ impl<T: SinCos> FixedRate for TiltControllerWith<T> {
 
     fn telemetry(&self) -> Telemetry {
         TiltControllerWith::telemetry(self)
-    }
-}
-
-/// The tilt controller with the math backend's sine and cosine ([`BackendSinCos`](sincos::BackendSinCos): libm, or
-/// micromath with `fast-math`) on the wire as the [`Kind::Tilt`](crate::protocol::Kind::Tilt)
-/// kind, like the shipped [`TiltController`]: the same parameters, frames and commands. It
-/// is not shipped (libm's `sinf` alone is ~1350 instructions, over the step budget); a
-/// firmware built with the `tilt-backend-sincos` feature hosts it in the Tilt slot instead
-/// of [`TiltController`], so that HIL measures what accuracy costs on the target
-/// (BENCHMARKS.md), against this type as its shadow on the host.
-impl crate::protocol::Wire for TiltControllerWith<sincos::BackendSinCos> {
-    const KIND: crate::protocol::Kind = <TiltController as crate::protocol::Wire>::KIND;
-    fn config(params: TiltParams) -> crate::protocol::Config {
-        <TiltController as crate::protocol::Wire>::config(params)
-    }
-    fn params_of(config: &crate::protocol::Config) -> Option<&TiltParams> {
-        <TiltController as crate::protocol::Wire>::params_of(config)
-    }
-    fn frame(frame: TiltFrame) -> crate::protocol::Frame {
-        <TiltController as crate::protocol::Wire>::frame(frame)
-    }
-    fn frame_of(frame: &crate::protocol::Frame) -> Option<&TiltFrame> {
-        <TiltController as crate::protocol::Wire>::frame_of(frame)
-    }
-    fn command(command: TiltCommand) -> crate::protocol::Command {
-        <TiltController as crate::protocol::Wire>::command(command)
-    }
-    fn command_of(command: &crate::protocol::Command) -> Option<TiltCommand> {
-        <TiltController as crate::protocol::Wire>::command_of(command)
     }
 }
 
