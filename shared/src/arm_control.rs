@@ -46,6 +46,7 @@
 
 use crate::bspline::{Knots, SplineSample};
 use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::freshness::Freshness;
 use crate::math::{cos_poly_f32, Real};
 use crate::mirror::PaddleReference;
 use crate::params::{finite, non_negative, positive, ParamError};
@@ -275,9 +276,10 @@ impl Reply for ArmCommand {
 pub struct ArmController {
     params: ArmParams,
     tracker: Tracker,
-    first_seq: Option<u32>,
-    last_seq: u32,
-    stale_steps: u16,
+    /// The first new sample's sequence number: the trajectory's start (0 before it).
+    first_seq: u32,
+    /// Whether each frame carries a new sample (the last new one is the trajectory time).
+    seq: Freshness,
     fault: Fault,
     /// Last valid joint measurement, dead-reckoned with our own commands while faulted.
     joint: PaddleState<f32>,
@@ -293,9 +295,8 @@ impl ArmController {
         Ok(Self {
             params,
             tracker,
-            first_seq: None,
-            last_seq: 0,
-            stale_steps: 0,
+            first_seq: 0,
+            seq: Freshness::new(),
             fault: Fault::None,
             joint: PaddleState::new(start.angle_rad, 0.0),
             last_error_rad: 0.0,
@@ -351,13 +352,16 @@ impl ArmController {
         if self.fault != Fault::None {
             return self.safe(frame.seq, self.fault);
         }
+        let started = self.seq.seen();
         if let Err(fault) = self.check(frame) {
             return self.safe(frame.seq, fault);
         }
+        if !started {
+            self.first_seq = frame.seq;
+        }
         let joint = PaddleState::new(frame.angle_rad, frame.velocity_radps);
         self.joint = joint;
-        let first = *self.first_seq.get_or_insert(frame.seq);
-        let t_s = self.last_seq.wrapping_sub(first) as f32 * self.params.dt_s;
+        let t_s = self.seq.last_seq().wrapping_sub(self.first_seq) as f32 * self.params.dt_s;
         let r = self.reference(t_s);
         let r = self.tracker.clamp_reference(PaddleReference {
             height_m: r.angle_rad,
@@ -417,22 +421,7 @@ impl ArmController {
         {
             return Err(Fault::OutOfRange);
         }
-        let fresh = match self.first_seq {
-            None => true,
-            Some(_) => {
-                let ahead = frame.seq.wrapping_sub(self.last_seq);
-                ahead != 0 && ahead < u32::MAX / 2
-            }
-        };
-        if fresh {
-            self.last_seq = frame.seq;
-            self.stale_steps = 0;
-        } else {
-            self.stale_steps = self.stale_steps.saturating_add(1);
-            if self.stale_steps > self.params.stale_limit_steps {
-                return Err(Fault::Stale);
-            }
-        }
+        self.seq.check(frame.seq, self.params.stale_limit_steps)?;
         Ok(())
     }
 }

@@ -17,6 +17,7 @@
 
 use crate::estimate::{BallEstimator, Estimate, EstimatorParams};
 use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::freshness::Freshness;
 use crate::math::Real;
 use crate::mirror::{MirrorLaw, PaddleReference};
 use crate::params::{finite, positive, within, ParamError};
@@ -151,8 +152,8 @@ pub struct Controller {
     tracker: Tracker,
     estimator: BallEstimator,
     estimate: Estimate,
-    last_seq: Option<u32>,
-    stale_steps: u16,
+    /// Whether each frame carries a new sample.
+    seq: Freshness,
     /// Last valid paddle measurement, dead-reckoned with our own commands while faulted.
     paddle: PaddleState<f32>,
     /// Plausible paddle measurements, computed once from the limits (see [`Self::check`]).
@@ -206,8 +207,7 @@ impl Controller {
             tracker,
             estimator,
             estimate: Estimate::default(),
-            last_seq: None,
-            stale_steps: 0,
+            seq: Freshness::new(),
             paddle: PaddleState::new(params.home_height_m, 0.0),
             plausible: PlausiblePaddle::new(&params.limits),
         })
@@ -324,25 +324,7 @@ impl Controller {
             });
         }
         // a sample is new if its sequence number moved forward (wrapping arithmetic)
-        let fresh = match self.last_seq {
-            None => true,
-            Some(last) => {
-                let ahead = frame.seq.wrapping_sub(last);
-                ahead != 0 && ahead < u32::MAX / 2
-            }
-        };
-        if fresh {
-            self.last_seq = Some(frame.seq);
-            self.stale_steps = 0;
-            Ok(true)
-        } else {
-            self.stale_steps = self.stale_steps.saturating_add(1);
-            if self.stale_steps > self.params.stale_limit_steps {
-                Err(Fault::Stale)
-            } else {
-                Ok(false)
-            }
-        }
+        self.seq.check(frame.seq, self.params.stale_limit_steps)
     }
 }
 

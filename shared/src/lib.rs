@@ -32,10 +32,13 @@
 
 pub mod arm_control;
 pub mod bspline;
+pub(crate) mod checks;
 pub mod control;
 pub mod echo;
 pub mod estimate;
+pub(crate) mod fields;
 pub mod fixed_rate;
+pub mod freshness;
 pub mod hop;
 pub mod hop_control;
 pub mod math;

@@ -78,20 +78,20 @@
 //! 460); BENCHMARKS.md gets the figures of the firmware build at integration.
 
 pub mod axis;
-pub(crate) mod checks;
 pub mod contact;
-pub(crate) mod fields;
 pub mod flight;
 pub mod plan;
 pub mod sincos;
 
+use crate::checks::Checks;
+use crate::fields;
 use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::freshness::Freshness;
 use crate::math::Real;
 use crate::params::ParamError;
 use crate::state::PaddleState;
 use crate::tilt::TiltLaw;
 use axis::Axis;
-use checks::Checks;
 
 use contact::{
     ContactGeometry, ContactInput, ContactPrediction, ContactSolver, MAX_CONTACT_ITERATIONS,
@@ -766,8 +766,8 @@ pub struct TiltControllerWith<T: SinCos> {
     unreachable: bool,
     /// Last measured (or, in the safe state, dead-reckoned) tilt and stroke.
     table: [PaddleState<f32>; 2],
-    last_seq: Option<u32>,
-    stale_steps: u16,
+    /// Whether each frame carries a new sample.
+    seq: Freshness,
     mode: Mode,
     _sin_cos: PhantomData<T>,
 }
@@ -815,8 +815,7 @@ impl<T: SinCos> TiltControllerWith<T> {
                 PaddleState::new(t.home_rad, 0.0),
                 PaddleState::new(s.home_m, 0.0),
             ],
-            last_seq: None,
-            stale_steps: 0,
+            seq: Freshness::new(),
             mode: Mode::Hold,
             _sin_cos: PhantomData,
         })
@@ -1177,25 +1176,7 @@ impl<T: SinCos> TiltControllerWith<T> {
                 Fault::NonFinite
             });
         }
-        let fresh = match self.last_seq {
-            None => true,
-            Some(last) => {
-                let ahead = frame.seq.wrapping_sub(last);
-                ahead != 0 && ahead < u32::MAX / 2
-            }
-        };
-        if fresh {
-            self.last_seq = Some(frame.seq);
-            self.stale_steps = 0;
-            Ok(true)
-        } else {
-            self.stale_steps = self.stale_steps.saturating_add(1);
-            if self.stale_steps > self.params.stale_limit_steps {
-                Err(Fault::Stale)
-            } else {
-                Ok(false)
-            }
-        }
+        self.seq.check(frame.seq, self.params.stale_limit_steps)
     }
 }
 
@@ -1235,8 +1216,8 @@ impl<T: SinCos> FixedRate for TiltControllerWith<T> {
 
 #[cfg(test)]
 mod tests {
-    use super::fields::{Count, Fields};
     use super::*;
+    use crate::fields::{Count, Fields};
     use crate::hop_control::{HopFrame, HopParams};
     use crate::tilt::EnergyFeedback;
 
