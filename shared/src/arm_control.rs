@@ -259,16 +259,6 @@ impl Reply for ArmCommand {
     fn fault(&self) -> Fault {
         self.fault
     }
-
-    fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.torque_nm.to_bits() == other.torque_nm.to_bits()
-            && self.accel_cmd_radps2.to_bits() == other.accel_cmd_radps2.to_bits()
-            && self.angle_ref_rad.to_bits() == other.angle_ref_rad.to_bits()
-            && self.velocity_ref_radps.to_bits() == other.velocity_ref_radps.to_bits()
-            && self.mode == other.mode
-            && self.fault == other.fault
-    }
 }
 
 /// The arm's trajectory-tracking controller, stepped at a fixed rate.

@@ -368,15 +368,6 @@ impl Reply for ActuatorCommand {
     fn fault(&self) -> Fault {
         self.fault
     }
-
-    fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.paddle_accel_mps2.to_bits() == other.paddle_accel_mps2.to_bits()
-            && self.paddle_height_ref_m.to_bits() == other.paddle_height_ref_m.to_bits()
-            && self.paddle_velocity_ref_mps.to_bits() == other.paddle_velocity_ref_mps.to_bits()
-            && self.mode == other.mode
-            && self.fault == other.fault
-    }
 }
 
 #[cfg(test)]

@@ -60,13 +60,6 @@ impl Reply for EchoCommand {
     fn fault(&self) -> Fault {
         self.fault
     }
-
-    fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.value.to_bits() == other.value.to_bits()
-            && self.mode == other.mode
-            && self.fault == other.fault
-    }
 }
 
 /// The link-check controller.

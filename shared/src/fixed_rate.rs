@@ -127,15 +127,34 @@ pub trait FixedRate: Sized {
     fn telemetry(&self) -> Telemetry;
 }
 
+/// The longest postcard encoding of a command of any kind, bytes: the stack buffer
+/// [`Reply::bit_identical`] encodes into. The largest command (the tilt table's: a varint
+/// `u32` of up to 5 bytes, five `f32`s of 4 and three one-byte enums) takes 28;
+/// `shared/tests/bit_identical.rs` checks every kind's worst case against it.
+pub const MAX_COMMAND_LEN: usize = 32;
+
 /// What every command says about itself, whatever its actuator fields.
-pub trait Reply: Copy {
+pub trait Reply: Copy + Serialize {
     /// Sequence number of the sensor frame this command answers.
     fn seq(&self) -> u32;
     /// The controller's mode when it produced this command.
     fn mode(&self) -> Mode;
     /// The fault code; [`Fault::None`] unless `mode() == Mode::Safe`.
     fn fault(&self) -> Fault;
-    /// Whether two commands are identical bit for bit (every f32 compared by `to_bits`),
-    /// as the HIL check of firmware against SIL needs.
-    fn bit_identical(&self, other: &Self) -> bool;
+    /// Whether two commands are identical bit for bit, as the HIL check of firmware against
+    /// SIL needs: their postcard encodings (what the link carries; every `f32` as its bits,
+    /// so `-0.0` and `0.0`, or two NaN payloads, differ) are the same bytes. Every field
+    /// counts, one added later too. No allocation: each is encoded into a
+    /// [`MAX_COMMAND_LEN`]-byte stack buffer; a command that does not fit is never
+    /// identical (the tests rule that out for every kind).
+    fn bit_identical(&self, other: &Self) -> bool {
+        let (mut a, mut b) = ([0u8; MAX_COMMAND_LEN], [0u8; MAX_COMMAND_LEN]);
+        match (
+            postcard::to_slice(self, &mut a),
+            postcard::to_slice(other, &mut b),
+        ) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        }
+    }
 }

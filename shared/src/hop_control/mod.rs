@@ -213,15 +213,6 @@ impl Reply for HopCommand {
     fn fault(&self) -> Fault {
         self.fault
     }
-
-    fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.valve_open == other.valve_open
-            && self.thrust_mps2.to_bits() == other.thrust_mps2.to_bits()
-            && self.phase == other.phase
-            && self.mode == other.mode
-            && self.fault == other.fault
-    }
 }
 
 /// The fixed-rate hopper thrust controller.

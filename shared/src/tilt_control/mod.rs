@@ -605,18 +605,6 @@ impl Reply for TiltCommand {
     fn fault(&self) -> Fault {
         self.fault
     }
-
-    fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.tilt_accel_radps2.to_bits() == other.tilt_accel_radps2.to_bits()
-            && self.stroke_accel_mps2.to_bits() == other.stroke_accel_mps2.to_bits()
-            && self.tilt_ref_rad.to_bits() == other.tilt_ref_rad.to_bits()
-            && self.stroke_ref_m.to_bits() == other.stroke_ref_m.to_bits()
-            && self.impact_in_s.to_bits() == other.impact_in_s.to_bits()
-            && self.mode == other.mode
-            && self.fault == other.fault
-            && self.plan == other.plan
-    }
 }
 
 /// The plan both axes follow: the cubics' accelerations a(t) = a0 + jerk t from its start,
