@@ -125,7 +125,7 @@ use crate::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// One sample of the hopper, sent to the controller every control period. Its serde form
-/// is its fields as one flat tuple ([`crate::fields`]).
+/// is its fields as one flat tuple (the crate's `fields` module).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct HopFrame {

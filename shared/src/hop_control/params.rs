@@ -58,7 +58,7 @@ impl HopThrust {
 }
 
 /// Everything the hopper controller needs, SI units, f32 (sent over the wire in HIL). Its
-/// serde form is its fields as one flat tuple ([`crate::fields`]).
+/// serde form is its fields as one flat tuple (the crate's `fields` module).
 ///
 /// Sensor convention: `leg_compression_m` is chi_l minus the leg length, m (0 with the leg
 /// fully extended, positive in stance; in stance with the foot at height 0 the body height
