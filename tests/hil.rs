@@ -21,10 +21,10 @@
 
 use dexter_core::control::{Controller, ControllerParams};
 use dexter_core::echo::{Echo, EchoFrame, EchoParams};
-use dexter_core::fixed_rate::FixedRate;
+use dexter_core::fixed_rate::{Fault, FixedRate, Mode};
 use dexter_core::protocol::{
-    encode, Command, Config, DecodeError, DeviceMessage, Fault, Frame, FrameDecoder, HostMessage,
-    Kind, Mode, Rejection, SensorFrame, MAX_FRAME_LEN,
+    encode, Command, Config, DecodeError, DeviceMessage, Frame, FrameDecoder, HostMessage, Kind,
+    Rejection, SensorFrame, MAX_FRAME_LEN,
 };
 use dexter_sim::controller::{StepController, StepOutput};
 use dexter_sim::hil::{self, HilOptions, LinkKind, LockStep, StepBudget};

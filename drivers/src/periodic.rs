@@ -16,8 +16,7 @@
 //!   all but one of them are lost (a timer flag pends once), which the counts report.
 
 use crate::rig::Rig;
-use dexter_core::fixed_rate::{FixedRate, Reply};
-use dexter_core::protocol::{Fault, Mode};
+use dexter_core::fixed_rate::{Fault, FixedRate, Mode, Reply};
 
 /// The fault code an overrun's safe command carries: [`Fault::Overrun`].
 pub const OVERRUN_FAULT: Fault = Fault::Overrun;

@@ -73,9 +73,9 @@ pub fn run(timer: &SysTickInstructions) -> bool {
 /// for each controller kind; and the CRC alone per byte.
 pub fn protocol_costs(timer: &SysTickInstructions) {
     use crate::server::HostMessage as Decoded;
+    use dexter_core::fixed_rate::Telemetry;
     use dexter_core::protocol::{
-        encode, Command, DeviceMessage, Frame, FrameDecoder, HostMessage, Kind, Telemetry,
-        MAX_FRAME_LEN,
+        encode, Command, DeviceMessage, Frame, FrameDecoder, HostMessage, Kind, MAX_FRAME_LEN,
     };
     for &kind in Kind::ALL {
         // A kind this image leaves off the wire has no frame to measure.
@@ -122,8 +122,9 @@ pub fn protocol_costs(timer: &SysTickInstructions) {
 pub fn step_breakdown(timer: &SysTickInstructions) {
     use dexter_core::control::{Controller, ControllerParams};
     use dexter_core::estimate::BallEstimator;
+    use dexter_core::fixed_rate::Mode;
     use dexter_core::mirror::MirrorLaw;
-    use dexter_core::protocol::{Mode, SensorFrame};
+    use dexter_core::protocol::SensorFrame;
     use dexter_core::state::PaddleState;
     use dexter_core::track::Tracker;
 

@@ -19,9 +19,9 @@
 //! into [`Command`] are outside the measured window.
 
 use crate::board::StepTimer;
-use dexter_core::fixed_rate::FixedRate;
+use dexter_core::fixed_rate::{Fault, FixedRate, Telemetry};
 use dexter_core::params::ParamError;
-use dexter_core::protocol::{self, Command, Fault, Frame, Kind, Telemetry, Wire};
+use dexter_core::protocol::{self, Command, Frame, Kind, Wire};
 use serde::de::VariantAccess;
 
 /// Measure `f` with interrupts masked, so a receive interrupt that lands inside the

@@ -32,9 +32,10 @@
 
 use crate::board::StepTimer;
 use crate::hosted::{Hosted, Params};
+use dexter_core::fixed_rate::{Fault, Telemetry};
 use dexter_core::protocol::{
-    encode, Command, DecodeError, DeviceMessage, Fault, Frame, FrameDecoder, HostMessageOf,
-    HostedKinds, Partial, Rejection, RunSummary, Telemetry, MAX_FRAME_LEN,
+    encode, Command, DecodeError, DeviceMessage, Frame, FrameDecoder, HostMessageOf, HostedKinds,
+    Partial, Rejection, RunSummary, MAX_FRAME_LEN,
 };
 
 /// A host message as this image decodes it: the wire form of

@@ -6,7 +6,8 @@
 use crate::board::{StepTimer, SysTickInstructions};
 use cortex_m::peripheral::SYST;
 use dexter_core::control::{Controller, ControllerParams};
-use dexter_core::protocol::{Mode, SensorFrame};
+use dexter_core::fixed_rate::Mode;
+use dexter_core::protocol::SensorFrame;
 
 /// Control steps of the smoke run (0.6 s at 500 Hz: the ball falls, is hit once, rises).
 pub const SMOKE_STEPS: u32 = 300;

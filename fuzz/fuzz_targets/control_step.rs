@@ -3,7 +3,8 @@
 #![no_main]
 
 use dexter_core::control::{Controller, ControllerParams};
-use dexter_core::protocol::{Fault, Mode, SensorFrame};
+use dexter_core::fixed_rate::{Fault, Mode};
+use dexter_core::protocol::SensorFrame;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -6,9 +6,8 @@
 //! core linked in ([`Sil`]) or the firmware behind a link (`crate::hil`).
 
 use dexter_core::control::Controller;
-use dexter_core::fixed_rate::{FixedRate, Reply};
+use dexter_core::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
 use dexter_core::params::ParamError;
-use dexter_core::protocol::{Fault, Mode, Telemetry};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -143,7 +142,7 @@ pub struct SafeSteps {
     pub steps: u64,
 }
 
-/// A fault code's name in the summary (snake_case, as in `dexter_core::protocol::Fault`).
+/// A fault code's name in the summary (snake_case, as in `dexter_core::fixed_rate::Fault`).
 pub fn fault_name(f: Fault) -> &'static str {
     match f {
         Fault::None => "none",

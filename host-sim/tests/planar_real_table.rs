@@ -2,7 +2,7 @@
 //! with limits, a camera, the core's fixed-rate `TiltController` in the loop (SIL), against
 //! the paper's ideal table (Zumel & Erdmann sec. 2.3).
 
-use dexter_core::protocol::Fault;
+use dexter_core::fixed_rate::Fault;
 use dexter_core::tilt_control::{TiltCommand, TiltController, TiltFrame};
 use dexter_sim::controller::{ControllerError, Sil, StepController, StepOutput};
 use dexter_sim::model::planar::real_table::{

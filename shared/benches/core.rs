@@ -11,9 +11,10 @@
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use dexter_core::control::{Controller, ControllerParams};
+use dexter_core::fixed_rate::Mode;
 use dexter_core::math::{cos_poly_f32, sin_poly_f32};
 use dexter_core::mirror::MirrorLaw;
-use dexter_core::protocol::{Mode, SensorFrame};
+use dexter_core::protocol::SensorFrame;
 use dexter_core::state::BallState;
 use micromath::F32Ext;
 use std::hint::black_box;

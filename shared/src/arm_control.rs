@@ -45,11 +45,11 @@
 //! allocates nothing and never panics.
 
 use crate::bspline::{Knots, SplineSample};
-use crate::fixed_rate::{FixedRate, Reply};
+use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::freshness::Freshness;
 use crate::math::{cos_poly_f32, Real};
 use crate::mirror::PaddleReference;
 use crate::params::{finite, non_negative, positive, ParamError};
-use crate::protocol::{Fault, Mode, Telemetry};
 use crate::state::PaddleState;
 use crate::track::{PaddleLimits, Tracker};
 use serde::{Deserialize, Serialize};
@@ -259,16 +259,6 @@ impl Reply for ArmCommand {
     fn fault(&self) -> Fault {
         self.fault
     }
-
-    fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.torque_nm.to_bits() == other.torque_nm.to_bits()
-            && self.accel_cmd_radps2.to_bits() == other.accel_cmd_radps2.to_bits()
-            && self.angle_ref_rad.to_bits() == other.angle_ref_rad.to_bits()
-            && self.velocity_ref_radps.to_bits() == other.velocity_ref_radps.to_bits()
-            && self.mode == other.mode
-            && self.fault == other.fault
-    }
 }
 
 /// The arm's trajectory-tracking controller, stepped at a fixed rate.
@@ -276,9 +266,10 @@ impl Reply for ArmCommand {
 pub struct ArmController {
     params: ArmParams,
     tracker: Tracker,
-    first_seq: Option<u32>,
-    last_seq: u32,
-    stale_steps: u16,
+    /// The first new sample's sequence number: the trajectory's start (0 before it).
+    first_seq: u32,
+    /// Whether each frame carries a new sample (the last new one is the trajectory time).
+    seq: Freshness,
     fault: Fault,
     /// Last valid joint measurement, dead-reckoned with our own commands while faulted.
     joint: PaddleState<f32>,
@@ -294,9 +285,8 @@ impl ArmController {
         Ok(Self {
             params,
             tracker,
-            first_seq: None,
-            last_seq: 0,
-            stale_steps: 0,
+            first_seq: 0,
+            seq: Freshness::new(),
             fault: Fault::None,
             joint: PaddleState::new(start.angle_rad, 0.0),
             last_error_rad: 0.0,
@@ -352,13 +342,16 @@ impl ArmController {
         if self.fault != Fault::None {
             return self.safe(frame.seq, self.fault);
         }
+        let started = self.seq.seen();
         if let Err(fault) = self.check(frame) {
             return self.safe(frame.seq, fault);
         }
+        if !started {
+            self.first_seq = frame.seq;
+        }
         let joint = PaddleState::new(frame.angle_rad, frame.velocity_radps);
         self.joint = joint;
-        let first = *self.first_seq.get_or_insert(frame.seq);
-        let t_s = self.last_seq.wrapping_sub(first) as f32 * self.params.dt_s;
+        let t_s = self.seq.last_seq().wrapping_sub(self.first_seq) as f32 * self.params.dt_s;
         let r = self.reference(t_s);
         let r = self.tracker.clamp_reference(PaddleReference {
             height_m: r.angle_rad,
@@ -418,22 +411,7 @@ impl ArmController {
         {
             return Err(Fault::OutOfRange);
         }
-        let fresh = match self.first_seq {
-            None => true,
-            Some(_) => {
-                let ahead = frame.seq.wrapping_sub(self.last_seq);
-                ahead != 0 && ahead < u32::MAX / 2
-            }
-        };
-        if fresh {
-            self.last_seq = frame.seq;
-            self.stale_steps = 0;
-        } else {
-            self.stale_steps = self.stale_steps.saturating_add(1);
-            if self.stale_steps > self.params.stale_limit_steps {
-                return Err(Fault::Stale);
-            }
-        }
+        self.seq.check(frame.seq, self.params.stale_limit_steps)?;
         Ok(())
     }
 }

@@ -16,14 +16,46 @@
 //! the estimate is valid again, and then tracks ([`Mode::Track`]).
 
 use crate::estimate::{BallEstimator, Estimate, EstimatorParams};
-use crate::fixed_rate::FixedRate;
+use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::freshness::Freshness;
 use crate::math::Real;
 use crate::mirror::{MirrorLaw, PaddleReference};
 use crate::params::{finite, positive, within, ParamError};
-use crate::protocol::{ActuatorCommand, Fault, Mode, SensorFrame, Telemetry};
 use crate::state::PaddleState;
 use crate::track::{PaddleLimits, Tracker};
 use serde::{Deserialize, Serialize};
+
+/// One sample of the line juggler's plant, sent to its controller every control period.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SensorFrame {
+    /// Sample sequence number; a controller that sees it not advance counts the input stale.
+    pub seq: u32,
+    /// Measured ball height above the impact plane, m (NaN if the sensor lost the ball).
+    pub ball_height_m: f32,
+    /// Measured paddle height, m.
+    pub paddle_height_m: f32,
+    /// Measured paddle velocity, m/s.
+    pub paddle_velocity_mps: f32,
+}
+
+/// The line juggler's output for one control period.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ActuatorCommand {
+    /// Sequence number of the sensor frame this command answers.
+    pub seq: u32,
+    /// Commanded paddle acceleration, m/s^2, held for one control period (zero-order hold).
+    pub paddle_accel_mps2: f32,
+    /// Paddle height reference the command tracks, m (informational).
+    pub paddle_height_ref_m: f32,
+    /// Paddle velocity reference, m/s (informational).
+    pub paddle_velocity_ref_mps: f32,
+    /// Mode of operation.
+    pub mode: Mode,
+    /// Fault code; `Fault::None` unless `mode == Mode::Safe`.
+    pub fault: Fault,
+}
 
 /// Everything a line-juggler controller needs, SI units, f32 (sent over the wire in HIL).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -120,8 +152,8 @@ pub struct Controller {
     tracker: Tracker,
     estimator: BallEstimator,
     estimate: Estimate,
-    last_seq: Option<u32>,
-    stale_steps: u16,
+    /// Whether each frame carries a new sample.
+    seq: Freshness,
     /// Last valid paddle measurement, dead-reckoned with our own commands while faulted.
     paddle: PaddleState<f32>,
     /// Plausible paddle measurements, computed once from the limits (see [`Self::check`]).
@@ -175,8 +207,7 @@ impl Controller {
             tracker,
             estimator,
             estimate: Estimate::default(),
-            last_seq: None,
-            stale_steps: 0,
+            seq: Freshness::new(),
             paddle: PaddleState::new(params.home_height_m, 0.0),
             plausible: PlausiblePaddle::new(&params.limits),
         })
@@ -293,25 +324,7 @@ impl Controller {
             });
         }
         // a sample is new if its sequence number moved forward (wrapping arithmetic)
-        let fresh = match self.last_seq {
-            None => true,
-            Some(last) => {
-                let ahead = frame.seq.wrapping_sub(last);
-                ahead != 0 && ahead < u32::MAX / 2
-            }
-        };
-        if fresh {
-            self.last_seq = Some(frame.seq);
-            self.stale_steps = 0;
-            Ok(true)
-        } else {
-            self.stale_steps = self.stale_steps.saturating_add(1);
-            if self.stale_steps > self.params.stale_limit_steps {
-                Err(Fault::Stale)
-            } else {
-                Ok(false)
-            }
-        }
+        self.seq.check(frame.seq, self.params.stale_limit_steps)
     }
 }
 
@@ -343,10 +356,23 @@ impl FixedRate for Controller {
     }
 }
 
+impl Reply for ActuatorCommand {
+    fn seq(&self) -> u32 {
+        self.seq
+    }
+
+    fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    fn fault(&self) -> Fault {
+        self.fault
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fixed_rate::Reply;
 
     fn frame(seq: u32, ball: f32) -> SensorFrame {
         SensorFrame {
@@ -605,5 +631,20 @@ mod tests {
             Controller::new(p).unwrap_err(),
             ParamError::OutOfRange("home_height_m")
         );
+    }
+
+    #[test]
+    fn bit_identical_tells_signed_zeros_and_nan_payloads_apart() {
+        let a = ActuatorCommand::default();
+        let mut b = a;
+        assert!(a.bit_identical(&b));
+        b.paddle_accel_mps2 = -0.0;
+        assert!(!a.bit_identical(&b), "+0 and -0 differ in their bits");
+        b = a;
+        b.fault = Fault::Stale;
+        assert!(!a.bit_identical(&b));
+        b = a;
+        b.seq = 1;
+        assert!(!a.bit_identical(&b));
     }
 }

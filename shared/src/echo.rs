@@ -8,9 +8,8 @@
 //! protocol generic: the firmware hosts it beside the line juggler, and the HIL tests
 //! switch between the two and send frames of the wrong kind.
 
-use crate::fixed_rate::{FixedRate, Reply};
+use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
 use crate::params::{finite, ParamError};
-use crate::protocol::{Fault, Mode, Telemetry};
 use serde::{Deserialize, Serialize};
 
 /// Parameters of the link check.
@@ -60,13 +59,6 @@ impl Reply for EchoCommand {
 
     fn fault(&self) -> Fault {
         self.fault
-    }
-
-    fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.value.to_bits() == other.value.to_bits()
-            && self.mode == other.mode
-            && self.fault == other.fault
     }
 }
 

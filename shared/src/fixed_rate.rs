@@ -22,7 +22,84 @@
 //! [`Wire`]: crate::protocol::Wire
 
 use crate::params::ParamError;
-use crate::protocol::{ActuatorCommand, Fault, Mode, Telemetry};
+use serde::{Deserialize, Serialize};
+
+/// Length of the controller-defined estimate in [`Telemetry::estimate`]: the main state of
+/// each kind (the line juggler's ball height and velocity; a planar body's pose; a hopper's
+/// leg length, velocity and phase). Every slot costs 4 bytes in every `Output` frame, on a
+/// real UART too, so it is kept small.
+pub const ESTIMATE_LEN: usize = 3;
+
+/// What a controller is doing with its actuator.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Mode {
+    /// No valid estimate yet: the actuator is held at its home position.
+    #[default]
+    Hold = 0,
+    /// Tracking the control law.
+    Track = 1,
+    /// Safe state after a fault: the actuator is braked to rest where it is.
+    Safe = 2,
+}
+
+/// Why a controller is in its safe state (0 = no fault).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Fault {
+    /// No fault.
+    #[default]
+    None = 0,
+    /// A measurement was NaN or infinite.
+    NonFinite = 1,
+    /// A measurement was outside its plausible range.
+    OutOfRange = 2,
+    /// No new sample (the sequence number did not advance) within the stale limit.
+    Stale = 3,
+    /// No valid frame arrived on the link within its timeout (set by the firmware).
+    LinkTimeout = 4,
+    /// The control period's work ran past the next tick (set by a board's fixed-rate loop).
+    Overrun = 5,
+}
+
+/// Status the firmware reports alongside each command, the same for every controller kind.
+///
+/// The core fills [`estimate`](Self::estimate) and [`estimate_valid`](Self::estimate_valid)
+/// ([`FixedRate::telemetry`]); the firmware adds the timing and link counts. What the
+/// estimate's slots hold is the controller's to document (the line juggler: ball height,
+/// m, and velocity, m/s; unused slots are 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Telemetry {
+    /// Instructions (or cycles, on hardware) the last control step took.
+    pub step_instructions: u32,
+    /// Frames rejected by the firmware's decoder so far (CRC, COBS, decode, overlong).
+    pub link_errors: u32,
+    /// Frames accepted by the firmware's decoder so far.
+    pub frames_ok: u32,
+    /// The controller's state estimate, SI units, slots defined by the controller kind.
+    pub estimate: [f32; ESTIMATE_LEN],
+    /// Whether the estimate is valid.
+    pub estimate_valid: bool,
+}
+
+impl Telemetry {
+    /// Telemetry with the first `values.len()` (at most [`ESTIMATE_LEN`]) estimate slots
+    /// set, the rest 0, and no timing or link counts (the core's part).
+    pub fn with_estimate(values: &[f32], valid: bool) -> Self {
+        let mut estimate = [0.0; ESTIMATE_LEN];
+        for (slot, v) in estimate.iter_mut().zip(values) {
+            *slot = *v;
+        }
+        Self {
+            estimate,
+            estimate_valid: valid,
+            ..Self::default()
+        }
+    }
+}
 
 /// A controller stepped once per fixed control period.
 pub trait FixedRate: Sized {
@@ -50,58 +127,34 @@ pub trait FixedRate: Sized {
     fn telemetry(&self) -> Telemetry;
 }
 
+/// The longest postcard encoding of a command of any kind, bytes: the stack buffer
+/// [`Reply::bit_identical`] encodes into. The largest command (the tilt table's: a varint
+/// `u32` of up to 5 bytes, five `f32`s of 4 and three one-byte enums) takes 28;
+/// `shared/tests/bit_identical.rs` checks every kind's worst case against it.
+pub const MAX_COMMAND_LEN: usize = 32;
+
 /// What every command says about itself, whatever its actuator fields.
-pub trait Reply: Copy {
+pub trait Reply: Copy + Serialize {
     /// Sequence number of the sensor frame this command answers.
     fn seq(&self) -> u32;
     /// The controller's mode when it produced this command.
     fn mode(&self) -> Mode;
     /// The fault code; [`Fault::None`] unless `mode() == Mode::Safe`.
     fn fault(&self) -> Fault;
-    /// Whether two commands are identical bit for bit (every f32 compared by `to_bits`),
-    /// as the HIL check of firmware against SIL needs.
-    fn bit_identical(&self, other: &Self) -> bool;
-}
-
-impl Reply for ActuatorCommand {
-    fn seq(&self) -> u32 {
-        self.seq
-    }
-
-    fn mode(&self) -> Mode {
-        self.mode
-    }
-
-    fn fault(&self) -> Fault {
-        self.fault
-    }
-
+    /// Whether two commands are identical bit for bit, as the HIL check of firmware against
+    /// SIL needs: their postcard encodings (what the link carries; every `f32` as its bits,
+    /// so `-0.0` and `0.0`, or two NaN payloads, differ) are the same bytes. Every field
+    /// counts, one added later too. No allocation: each is encoded into a
+    /// [`MAX_COMMAND_LEN`]-byte stack buffer; a command that does not fit is never
+    /// identical (the tests rule that out for every kind).
     fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.paddle_accel_mps2.to_bits() == other.paddle_accel_mps2.to_bits()
-            && self.paddle_height_ref_m.to_bits() == other.paddle_height_ref_m.to_bits()
-            && self.paddle_velocity_ref_mps.to_bits() == other.paddle_velocity_ref_mps.to_bits()
-            && self.mode == other.mode
-            && self.fault == other.fault
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bit_identical_tells_signed_zeros_and_nan_payloads_apart() {
-        let a = ActuatorCommand::default();
-        let mut b = a;
-        assert!(a.bit_identical(&b));
-        b.paddle_accel_mps2 = -0.0;
-        assert!(!a.bit_identical(&b), "+0 and -0 differ in their bits");
-        b = a;
-        b.fault = Fault::Stale;
-        assert!(!a.bit_identical(&b));
-        b = a;
-        b.seq = 1;
-        assert!(!a.bit_identical(&b));
+        let (mut a, mut b) = ([0u8; MAX_COMMAND_LEN], [0u8; MAX_COMMAND_LEN]);
+        match (
+            postcard::to_slice(self, &mut a),
+            postcard::to_slice(other, &mut b),
+        ) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        }
     }
 }

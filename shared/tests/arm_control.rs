@@ -3,8 +3,8 @@
 
 use dexter_core::arm_control::{ArmCommand, ArmController, ArmFrame, ArmParams};
 use dexter_core::bspline::{Knots, MAX_KNOTS};
+use dexter_core::fixed_rate::{Fault, Mode};
 use dexter_core::params::ParamError;
-use dexter_core::protocol::{Fault, Mode};
 use proptest::prelude::*;
 
 /// A windup-and-swing trajectory: rest at 0, back to -0.3 rad, up to 0.6 rad, moving.

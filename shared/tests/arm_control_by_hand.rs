@@ -8,9 +8,8 @@
 
 use dexter_core::arm_control::{ArmCommand, ArmController, ArmFrame, ArmParams};
 use dexter_core::bspline::Knots;
-use dexter_core::fixed_rate::{FixedRate, Reply};
+use dexter_core::fixed_rate::{Fault, FixedRate, Mode, Reply};
 use dexter_core::params::ParamError;
-use dexter_core::protocol::{Fault, Mode};
 
 /// Default arm (J = 2.2 kg m^2, tau_g = 25 N m, 100 N m, 30 rad/s^2, 8 rad/s, +-1.6 rad),
 /// with the trajectory `points` of segment `h` s.

@@ -2,7 +2,8 @@
 //! a finite command within its limits, or the safe command with a fault code. It never panics.
 
 use dexter_core::control::{Controller, ControllerParams};
-use dexter_core::protocol::{Fault, Mode, SensorFrame};
+use dexter_core::fixed_rate::{Fault, Mode};
+use dexter_core::protocol::SensorFrame;
 use proptest::prelude::*;
 
 /// Any f32 bit pattern: NaNs, infinities, subnormals, huge and tiny values.

@@ -5,10 +5,11 @@
 
 use dexter_core::control::ControllerParams;
 use dexter_core::echo::{EchoCommand, EchoFrame, EchoParams};
+use dexter_core::fixed_rate::{Fault, Mode, Telemetry, ESTIMATE_LEN};
 use dexter_core::protocol::{
-    decode, encode, ActuatorCommand, Command, Config, DecodeError, DeviceMessage, Fault, Frame,
-    FrameDecoder, HostMessage, Kind, Mode, Rejection, RunSummary, SensorFrame, Telemetry,
-    ESTIMATE_LEN, MAX_FRAME_LEN, MAX_PAYLOAD_LEN,
+    decode, encode, ActuatorCommand, Command, Config, DecodeError, DeviceMessage, Frame,
+    FrameDecoder, HostMessage, Kind, Rejection, RunSummary, SensorFrame, MAX_FRAME_LEN,
+    MAX_PAYLOAD_LEN,
 };
 use proptest::prelude::*;
 

@@ -1,4 +1,4 @@
-//! The flat-tuple serde form of the large parameter sets (`tilt_control::fields`, used by
+//! The flat-tuple serde form of the large parameter sets (`dexter_core`'s `fields` module, used by
 //! `TiltParams`, `TiltFrame`, `HopParams`, `HopFrame`) read from a self-describing sequence
 //! (serde's own `SeqDeserializer`, the shape a JSON or TOML array has): a short sequence's
 //! error says how many values it had and how many the set needs, and of several bad values

@@ -2,9 +2,8 @@
 //! each against what its documentation states (a mutation pass over `tilt_control` found
 //! these unpinned by the core's own tests).
 
-use dexter_core::fixed_rate::Reply;
+use dexter_core::fixed_rate::{Fault, Mode, Reply};
 use dexter_core::params::ParamError;
-use dexter_core::protocol::{Fault, Mode};
 use dexter_core::tilt_control::{PlanStatus, TiltCommand, TiltParams};
 
 fn refused(p: &TiltParams, key: &'static str) {

@@ -9,9 +9,8 @@
 
 use core::f64::consts::PI;
 
-use dexter_core::fixed_rate::{FixedRate, Reply};
+use dexter_core::fixed_rate::{Fault, FixedRate, Mode, Reply};
 use dexter_core::math::{sin_cos_poly_f32, BACKEND};
-use dexter_core::protocol::{Fault, Mode};
 use dexter_core::tilt_control::sincos::{BackendSinCos, PolySinCos, SeparatePolySinCos, SinCos};
 use dexter_core::tilt_control::{TiltController, TiltControllerWith, TiltParams};
 

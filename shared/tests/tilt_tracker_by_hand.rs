@@ -11,9 +11,8 @@
 //! Where a boundary is compared exactly, the period is a power of two (1/512 s) so that the
 //! controller's f32 sums of periods are exact.
 
-use dexter_core::fixed_rate::{FixedRate, Reply};
+use dexter_core::fixed_rate::{Fault, FixedRate, Mode, Reply};
 use dexter_core::params::ParamError;
-use dexter_core::protocol::{Fault, Mode};
 use dexter_core::tilt_control::flight::FlightTuning;
 use dexter_core::tilt_control::{PlanStatus, TiltCommand, TiltController, TiltFrame, TiltParams};
 

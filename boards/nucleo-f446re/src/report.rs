@@ -4,7 +4,8 @@
 use crate::rig::BoardRig;
 use crate::CONTROL_RATE_HZ;
 use dexter_core::control::Controller;
-use dexter_core::protocol::{ActuatorCommand, Fault, Mode};
+use dexter_core::fixed_rate::{Fault, Mode};
+use dexter_core::protocol::ActuatorCommand;
 use dexter_drivers::actuator::Drive;
 use dexter_drivers::camera::CameraStats;
 use dexter_drivers::periodic::{PeriodOutcome, PeriodStats, Periodic};

@@ -8,10 +8,9 @@ use super::report::{Counters, LinkCounts};
 use super::{HilOptions, StepBudget, LOCKSTEP_TIMEOUT_PERIODS};
 use crate::controller::{ControllerError, HilReport, StepController, StepOutput};
 use dexter_core::control::Controller;
-use dexter_core::fixed_rate::Reply;
+use dexter_core::fixed_rate::{Fault, Reply};
 use dexter_core::protocol::{
-    encode, DeviceMessage, Fault, FrameDecoder, HostMessage, Rejection, RunSummary, Wire,
-    MAX_FRAME_LEN,
+    encode, DeviceMessage, FrameDecoder, HostMessage, Rejection, RunSummary, Wire, MAX_FRAME_LEN,
 };
 use std::collections::VecDeque;
 use std::path::PathBuf;

@@ -1,7 +1,7 @@
 //! What a HIL run counts, and the reports built from the counts.
 
 use crate::controller::HilReport;
-use dexter_core::protocol::Telemetry;
+use dexter_core::fixed_rate::Telemetry;
 use std::time::Duration;
 
 /// The link's frame counts, on both ends: what the host sent and predicted (without a

@@ -188,10 +188,10 @@ impl FixedRate for NoController {
     fn step(&mut self, _: &()) -> Self::Command {
         match *self {}
     }
-    fn safe(&mut self, _: u32, _: dexter_core::protocol::Fault) -> Self::Command {
+    fn safe(&mut self, _: u32, _: dexter_core::fixed_rate::Fault) -> Self::Command {
         match *self {}
     }
-    fn telemetry(&self) -> dexter_core::protocol::Telemetry {
+    fn telemetry(&self) -> dexter_core::fixed_rate::Telemetry {
         match *self {}
     }
 }

@@ -117,15 +117,15 @@ mod params;
 pub use detect::{BottomSearch, Debounce};
 pub use params::{HopParams, HopThrust, MAX_DEBOUNCE_SAMPLES, MAX_LATENCY_STEPS, MAX_THRUST_STEPS};
 
-use crate::fixed_rate::{FixedRate, Reply};
+use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::freshness::Freshness;
 use crate::hop::{EnergyServoThrust, StancePhase};
 use crate::math::Real;
 use crate::params::ParamError;
-use crate::protocol::{Fault, Mode, Telemetry};
 use serde::{Deserialize, Serialize};
 
 /// One sample of the hopper, sent to the controller every control period. Its serde form
-/// is its fields as one flat tuple (`tilt_control::fields`).
+/// is its fields as one flat tuple (the crate's `fields` module).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct HopFrame {
@@ -153,7 +153,7 @@ impl HopFrame {
     }
 }
 
-impl crate::tilt_control::fields::Fields for HopFrame {
+impl crate::fields::Fields for HopFrame {
     const COUNT: usize = 5;
     const NAME: &'static str = "HopFrame";
 
@@ -161,7 +161,7 @@ impl crate::tilt_control::fields::Fields for HopFrame {
         Self::default()
     }
 
-    fn fields<V: crate::tilt_control::fields::FieldVisit>(&mut self, v: &mut V) {
+    fn fields<V: crate::fields::FieldVisit>(&mut self, v: &mut V) {
         v.u32(&mut self.seq);
         v.f32(&mut self.leg_compression_m);
         v.bool(&mut self.contact);
@@ -172,13 +172,13 @@ impl crate::tilt_control::fields::Fields for HopFrame {
 
 impl Serialize for HopFrame {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        crate::tilt_control::fields::serialize(self, s)
+        crate::fields::serialize(self, s)
     }
 }
 
 impl<'de> Deserialize<'de> for HopFrame {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        crate::tilt_control::fields::deserialize(d)
+        crate::fields::deserialize(d)
     }
 }
 
@@ -213,15 +213,6 @@ impl Reply for HopCommand {
     fn fault(&self) -> Fault {
         self.fault
     }
-
-    fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.valve_open == other.valve_open
-            && self.thrust_mps2.to_bits() == other.thrust_mps2.to_bits()
-            && self.phase == other.phase
-            && self.mode == other.mode
-            && self.fault == other.fault
-    }
 }
 
 /// The fixed-rate hopper thrust controller.
@@ -251,8 +242,8 @@ pub struct HopController {
     predicted: Option<(u32, f32)>,
     apex_m: f32,
     energy_jpkg: f32,
-    last_seq: Option<u32>,
-    stale_steps: u16,
+    /// Whether each frame carries a new sample.
+    seq: Freshness,
     /// The last two fresh compression samples and their steps (older first), for telemetry.
     samples: [(f32, u32); 2],
 }
@@ -286,8 +277,7 @@ impl HopController {
             predicted: None,
             apex_m: f32::NEG_INFINITY,
             energy_jpkg: f32::NAN,
-            last_seq: None,
-            stale_steps: 0,
+            seq: Freshness::new(),
             samples: [(0.0, 0); 2],
         })
     }
@@ -395,25 +385,7 @@ impl HopController {
         if c.abs() > p.max_compression_m || h_out {
             return Err(Fault::OutOfRange);
         }
-        let fresh = match self.last_seq {
-            None => true,
-            Some(last) => {
-                let ahead = frame.seq.wrapping_sub(last);
-                ahead != 0 && ahead < u32::MAX / 2
-            }
-        };
-        if fresh {
-            self.last_seq = Some(frame.seq);
-            self.stale_steps = 0;
-            Ok(true)
-        } else {
-            self.stale_steps = self.stale_steps.saturating_add(1);
-            if self.stale_steps > self.params.stale_limit_steps {
-                Err(Fault::Stale)
-            } else {
-                Ok(false)
-            }
-        }
+        self.seq.check(frame.seq, self.params.stale_limit_steps)
     }
 
     /// A fresh, valid sample: phase detection.

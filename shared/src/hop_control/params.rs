@@ -1,8 +1,8 @@
 //! Parameters of the fixed-rate hopper controller and their validation.
 
+use crate::checks::Checks;
 use crate::hop::EnergyServoThrust;
 use crate::params::ParamError;
-use crate::tilt_control::checks::Checks;
 use serde::{Deserialize, Serialize};
 
 /// Longest thrust the controller holds, in control periods (delta / dt).
@@ -58,7 +58,7 @@ impl HopThrust {
 }
 
 /// Everything the hopper controller needs, SI units, f32 (sent over the wire in HIL). Its
-/// serde form is its fields as one flat tuple (`tilt_control::fields`).
+/// serde form is its fields as one flat tuple (the crate's `fields` module).
 ///
 /// Sensor convention: `leg_compression_m` is chi_l minus the leg length, m (0 with the leg
 /// fully extended, positive in stance; in stance with the foot at height 0 the body height
@@ -219,7 +219,7 @@ impl HopParams {
     }
 }
 
-impl crate::tilt_control::fields::Fields for HopParams {
+impl crate::fields::Fields for HopParams {
     const COUNT: usize = 19;
     const NAME: &'static str = "HopParams";
 
@@ -244,7 +244,7 @@ impl crate::tilt_control::fields::Fields for HopParams {
         }
     }
 
-    fn fields<V: crate::tilt_control::fields::FieldVisit>(&mut self, v: &mut V) {
+    fn fields<V: crate::fields::FieldVisit>(&mut self, v: &mut V) {
         let t = &mut self.thrust;
         for x in [
             &mut self.dt_s,
@@ -278,12 +278,12 @@ impl crate::tilt_control::fields::Fields for HopParams {
 
 impl Serialize for HopParams {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        crate::tilt_control::fields::serialize(self, s)
+        crate::fields::serialize(self, s)
     }
 }
 
 impl<'de> Deserialize<'de> for HopParams {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        crate::tilt_control::fields::deserialize(d)
+        crate::fields::deserialize(d)
     }
 }

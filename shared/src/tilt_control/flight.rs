@@ -39,7 +39,7 @@
 //! the sample time; [`FlightEstimator::now`] flies it forward by its age (latency plus the
 //! control periods since the sample), which is exact in flight.
 
-use super::checks::Checks;
+use crate::checks::Checks;
 use crate::math::Real;
 use crate::params::{positive, ParamError};
 use serde::{Deserialize, Serialize};

@@ -78,21 +78,20 @@
 //! 460); BENCHMARKS.md gets the figures of the firmware build at integration.
 
 pub mod axis;
-pub(crate) mod checks;
 pub mod contact;
-pub(crate) mod fields;
 pub mod flight;
 pub mod plan;
 pub mod sincos;
 
-use crate::fixed_rate::{FixedRate, Reply};
+use crate::checks::Checks;
+use crate::fields;
+use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::freshness::Freshness;
 use crate::math::Real;
 use crate::params::ParamError;
-use crate::protocol::{Fault, Mode, Telemetry};
 use crate::state::PaddleState;
 use crate::tilt::TiltLaw;
 use axis::Axis;
-use checks::Checks;
 
 use contact::{
     ContactGeometry, ContactInput, ContactPrediction, ContactSolver, MAX_CONTACT_ITERATIONS,
@@ -606,18 +605,6 @@ impl Reply for TiltCommand {
     fn fault(&self) -> Fault {
         self.fault
     }
-
-    fn bit_identical(&self, other: &Self) -> bool {
-        self.seq == other.seq
-            && self.tilt_accel_radps2.to_bits() == other.tilt_accel_radps2.to_bits()
-            && self.stroke_accel_mps2.to_bits() == other.stroke_accel_mps2.to_bits()
-            && self.tilt_ref_rad.to_bits() == other.tilt_ref_rad.to_bits()
-            && self.stroke_ref_m.to_bits() == other.stroke_ref_m.to_bits()
-            && self.impact_in_s.to_bits() == other.impact_in_s.to_bits()
-            && self.mode == other.mode
-            && self.fault == other.fault
-            && self.plan == other.plan
-    }
 }
 
 /// The plan both axes follow: the cubics' accelerations a(t) = a0 + jerk t from its start,
@@ -767,8 +754,8 @@ pub struct TiltControllerWith<T: SinCos> {
     unreachable: bool,
     /// Last measured (or, in the safe state, dead-reckoned) tilt and stroke.
     table: [PaddleState<f32>; 2],
-    last_seq: Option<u32>,
-    stale_steps: u16,
+    /// Whether each frame carries a new sample.
+    seq: Freshness,
     mode: Mode,
     _sin_cos: PhantomData<T>,
 }
@@ -816,8 +803,7 @@ impl<T: SinCos> TiltControllerWith<T> {
                 PaddleState::new(t.home_rad, 0.0),
                 PaddleState::new(s.home_m, 0.0),
             ],
-            last_seq: None,
-            stale_steps: 0,
+            seq: Freshness::new(),
             mode: Mode::Hold,
             _sin_cos: PhantomData,
         })
@@ -1178,25 +1164,7 @@ impl<T: SinCos> TiltControllerWith<T> {
                 Fault::NonFinite
             });
         }
-        let fresh = match self.last_seq {
-            None => true,
-            Some(last) => {
-                let ahead = frame.seq.wrapping_sub(last);
-                ahead != 0 && ahead < u32::MAX / 2
-            }
-        };
-        if fresh {
-            self.last_seq = Some(frame.seq);
-            self.stale_steps = 0;
-            Ok(true)
-        } else {
-            self.stale_steps = self.stale_steps.saturating_add(1);
-            if self.stale_steps > self.params.stale_limit_steps {
-                Err(Fault::Stale)
-            } else {
-                Ok(false)
-            }
-        }
+        self.seq.check(frame.seq, self.params.stale_limit_steps)
     }
 }
 
@@ -1234,39 +1202,10 @@ impl<T: SinCos> FixedRate for TiltControllerWith<T> {
     }
 }
 
-/// The tilt controller with the math backend's sine and cosine ([`BackendSinCos`](sincos::BackendSinCos): libm, or
-/// micromath with `fast-math`) on the wire as the [`Kind::Tilt`](crate::protocol::Kind::Tilt)
-/// kind, like the shipped [`TiltController`]: the same parameters, frames and commands. It
-/// is not shipped (libm's `sinf` alone is ~1350 instructions, over the step budget); a
-/// firmware built with the `tilt-backend-sincos` feature hosts it in the Tilt slot instead
-/// of [`TiltController`], so that HIL measures what accuracy costs on the target
-/// (BENCHMARKS.md), against this type as its shadow on the host.
-impl crate::protocol::Wire for TiltControllerWith<sincos::BackendSinCos> {
-    const KIND: crate::protocol::Kind = <TiltController as crate::protocol::Wire>::KIND;
-    fn config(params: TiltParams) -> crate::protocol::Config {
-        <TiltController as crate::protocol::Wire>::config(params)
-    }
-    fn params_of(config: &crate::protocol::Config) -> Option<&TiltParams> {
-        <TiltController as crate::protocol::Wire>::params_of(config)
-    }
-    fn frame(frame: TiltFrame) -> crate::protocol::Frame {
-        <TiltController as crate::protocol::Wire>::frame(frame)
-    }
-    fn frame_of(frame: &crate::protocol::Frame) -> Option<&TiltFrame> {
-        <TiltController as crate::protocol::Wire>::frame_of(frame)
-    }
-    fn command(command: TiltCommand) -> crate::protocol::Command {
-        <TiltController as crate::protocol::Wire>::command(command)
-    }
-    fn command_of(command: &crate::protocol::Command) -> Option<TiltCommand> {
-        <TiltController as crate::protocol::Wire>::command_of(command)
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    use super::fields::{Count, Fields};
     use super::*;
+    use crate::fields::{Count, Fields};
     use crate::hop_control::{HopFrame, HopParams};
     use crate::tilt::EnergyFeedback;
 

@@ -8,8 +8,8 @@
 //! (~1e-3 absolute error).
 
 use super::{TiltCommand, TiltControllerWith, TiltFrame};
+use crate::fixed_rate::Fault;
 use crate::math::{cos_poly_f32, sin_cos_poly_f32, sin_poly_f32, Real};
-use crate::protocol::Fault;
 
 /// A sine/cosine pair, f32, for an angle in rad.
 pub trait SinCos: Sized {

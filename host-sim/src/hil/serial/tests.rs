@@ -10,10 +10,9 @@ use super::*;
 use crate::controller::StepController;
 use dexter_core::control::{Controller, ControllerParams};
 use dexter_core::echo::{Echo, EchoFrame, EchoParams};
-use dexter_core::fixed_rate::{FixedRate, Reply};
+use dexter_core::fixed_rate::{Fault, FixedRate, Reply, Telemetry};
 use dexter_core::protocol::{
-    encode, DeviceMessage, Fault, FrameDecoder, HostMessage, RunSummary, SensorFrame, Telemetry,
-    Wire, MAX_FRAME_LEN,
+    encode, DeviceMessage, FrameDecoder, HostMessage, RunSummary, SensorFrame, Wire, MAX_FRAME_LEN,
 };
 use std::fs::File;
 use std::os::fd::{FromRawFd, OwnedFd};

@@ -18,7 +18,7 @@ use super::simulate::{execute, Executed, GoalError};
 use super::{ArmError, ArmScene};
 use crate::controller::{Sil, StepController};
 use dexter_core::arm_control::{ArmController, ArmFrame};
-use dexter_core::protocol::{Fault, Mode};
+use dexter_core::fixed_rate::{Fault, Mode};
 use serde::Serialize;
 
 /// RK4 substeps per control period.

@@ -57,7 +57,7 @@ use super::table_run::{
 use super::{Body, PlanarError, PlanarModel, PlanarState, TableCommand};
 use crate::controller::{ControllerError, StepController};
 use crate::effects::actuator::{Actuator, IdealActuator, SecondOrderActuator};
-use dexter_core::protocol::{Fault, Mode};
+use dexter_core::fixed_rate::{Fault, Mode};
 use dexter_core::state::PaddleState;
 use dexter_core::tilt_control::sincos::SinCos;
 use dexter_core::tilt_control::{

@@ -38,10 +38,10 @@ pub use tracker::{SampledCycle, TimelineRow};
 use super::valve::{PlantError, ValveModel, ValvePlant};
 use super::{HopperError, ThrustLaw};
 use crate::controller::{ControllerError, HilReport, Sil, StepController};
+use dexter_core::fixed_rate::Fault;
 use dexter_core::hop::{EnergyServoThrust, RaibertThrust, StancePhase};
 use dexter_core::hop_control::{HopController, HopParams, HopThrust};
 use dexter_core::params::ParamError;
-use dexter_core::protocol::Fault;
 use sensor::{
     AtControlSteps, Clock, Delay, GaussianNoise, HopSensor, Latency, NoLatency, NoNoise,
     NoQuantization, Noise, Periodic, Quantization, Quantizer, Truth,

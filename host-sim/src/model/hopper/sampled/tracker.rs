@@ -5,9 +5,9 @@ use super::super::valve::TrueEvent;
 use super::sensor::Truth;
 use super::stats::{PhaseDetectionErrors, SETTLE_WINDOW};
 use super::{SampledConfig, TimelineWindow, LATE_APEXES, MAX_CYCLE_RECORDS, MAX_TIMELINE_ROWS};
+use dexter_core::fixed_rate::Mode;
 use dexter_core::hop::StancePhase;
 use dexter_core::hop_control::HopCommand;
-use dexter_core::protocol::Mode;
 use serde::Serialize;
 use std::collections::VecDeque;
 

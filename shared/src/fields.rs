@@ -1,4 +1,4 @@
-//! The serde form of the large parameter sets (the tilt controller's [`super::TiltParams`],
+//! The serde form of the large parameter sets (the tilt controller's [`crate::tilt_control::TiltParams`],
 //! the hopper's [`crate::hop_control::HopParams`]): their fields in declaration order as
 //! one flat tuple, nested structs inline.
 //!
