@@ -8,13 +8,14 @@ use dexter_core::hop::{
     EnergyServoThrust, RaibertThrust,
 };
 use dexter_core::params::ParamError;
+use dexter_sim::engine::ode::Integrator;
 use dexter_sim::model::hopper::analysis::{
     bottom_heights, detect_period, energies, locate_first_doubling, return_map, sweep_thrust,
 };
 use dexter_sim::model::hopper::nonlinear::dawson;
 use dexter_sim::model::hopper::{
-    FullNonlinear, Hopper, HopperError, HopperModel, HopperParams, Integrator, LinearSpring,
-    RunEnd, RunOptions, SimplifiedNonlinear, Start, ThrustLaw,
+    FullNonlinear, Hopper, HopperError, HopperModel, HopperParams, LinearSpring, RunEnd,
+    RunOptions, SimplifiedNonlinear, Start, ThrustLaw,
 };
 use std::f64::consts::{E, PI};
 

@@ -8,12 +8,13 @@
 use dexter_core::hop::{EnergyServoThrust, RaibertThrust};
 use dexter_core::hop_control::HopController;
 use dexter_sim::controller::{ControllerError, Sil, StepController, StepOutput};
+use dexter_sim::engine::ode::Integrator;
 use dexter_sim::model::hopper::sampled::{
     exact_orbit, run_sampled, run_sil, DetectorOptions, SampledConfig, SampledEnd, SampledRun,
     SensorConfig,
 };
 use dexter_sim::model::hopper::valve::ValveModel;
-use dexter_sim::model::hopper::{FullNonlinear, Integrator, LinearSpring, ThrustLaw};
+use dexter_sim::model::hopper::{FullNonlinear, LinearSpring, ThrustLaw};
 
 const G: f64 = 9.81;
 

@@ -2,9 +2,10 @@
 //! event-driven simulator: expected values never come from the plant itself.
 
 use dexter_core::hop::RaibertThrust;
+use dexter_sim::engine::ode::Integrator;
 use dexter_sim::model::hopper::valve::{TrueEvent, ValveModel, ValvePlant};
 use dexter_sim::model::hopper::{
-    FullNonlinear, Hopper, HopperModel, Integrator, LinearSpring, RunOptions, Start, ThrustLaw,
+    FullNonlinear, Hopper, HopperModel, LinearSpring, RunOptions, Start, ThrustLaw,
 };
 use std::f64::consts::PI;
 

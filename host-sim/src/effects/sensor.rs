@@ -1,65 +1,97 @@
-//! The ball-height sensor the controller sees.
+//! The one sampled sensor: every measurement the controllers see (the line juggler's ball
+//! height, the tilt table's camera pose, the hopper's leg compression, foot switch and body
+//! height) is taken by [`Sampled`], assembled from four effects, each with a zero-sized
+//! "off" type so that a plant assembled without it pays nothing:
 //!
-//! [`PerfectSensor`]: the frame at each control step carries the true height (as f32).
-//! [`SampledSensor`]: samples every `1/rate` s, adds Gaussian noise, quantizes, and
-//! delivers each sample `latency` s later; each control frame carries the newest delivered
-//! sample and its sequence number (a repeated number tells the controller nothing new
-//! arrived). Until the first sample is delivered the frame repeats sample 0's value.
+//! | effect | off | on |
+//! | --- | --- | --- |
+//! | rate ([`Clock`]) | [`AtControlSteps`]: one sample at every control step, sequence number = step | [`Periodic`]: samples every `1/rate` s, at their own times (plant events) |
+//! | noise and quantization ([`Measure`]) | [`Exact`] | [`Measured`]: per channel, Gaussian noise N(0, sigma) (one seeded generator, channels drawn in order, a channel with sigma 0 draws nothing), then rounding to a multiple of its step (0 = none) |
+//! | latency ([`Delay`]) | [`NoLatency`]: a sample is seen at once | [`Latency`]: seen `latency_s` after it was taken |
+//!
+//! A control frame carries the newest delivered sample and its sequence number (a repeated
+//! number tells the controller nothing new arrived). Until the first sample is delivered it
+//! carries the oldest sample taken (the controller sees it as one sample, then as stale
+//! repeats); with none taken at all, no sample ([`Sampled::deliver`] returns `None`).
+//!
+//! Each system reads its frame through a thin adapter of its own measurement: [`Sensor`]
+//! (the line's ball height, [`PerfectSensor`], [`SampledSensor`]),
+//! `crate::model::planar::camera` (the pose) and `crate::model::hopper::sampled::sensor`
+//! (compression, foot switch, height).
 
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 
-/// A ball sensor: sample events inside the plant, frames at control steps.
-pub trait Sensor {
-    /// Time of the next sample, s (infinite if the sensor samples only at control steps).
+/// When samples are taken.
+pub trait Clock {
+    /// Time of the next sample between control steps, s (infinite: none, samples are taken
+    /// at control steps).
     fn next_sample_time_s(&self) -> f64;
-    /// Take the sample due at `t_s` of the true height `height_m` (m).
-    fn sample(&mut self, t_s: f64, height_m: f64);
-    /// The frame content at control step `step` (time `t_s`): sequence number and the
-    /// measured height (m), given the true height now.
-    fn frame(&mut self, step: u64, t_s: f64, height_m: f64) -> (u32, f32);
+    /// True if a sample is taken at every control step.
+    fn at_control_steps(&self) -> bool;
+    /// Mark the next sample taken; its sequence number.
+    fn advance(&mut self) -> u32;
 }
 
-/// The true height at every control step, sequence number = step.
+/// One sample at every control step (the rate effect off).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PerfectSensor;
+pub struct AtControlSteps {
+    next: u32,
+}
 
-impl Sensor for PerfectSensor {
+impl Clock for AtControlSteps {
     #[inline(always)]
     fn next_sample_time_s(&self) -> f64 {
         f64::INFINITY
     }
     #[inline(always)]
-    fn sample(&mut self, _: f64, _: f64) {}
+    fn at_control_steps(&self) -> bool {
+        true
+    }
     #[inline(always)]
-    fn frame(&mut self, step: u64, _: f64, height_m: f64) -> (u32, f32) {
-        (step as u32, height_m as f32)
+    fn advance(&mut self) -> u32 {
+        let s = self.next;
+        self.next = self.next.wrapping_add(1);
+        s
     }
 }
 
-/// A sampled sensor with noise, quantization and latency.
-#[derive(Clone, Debug)]
-pub struct SampledSensor {
+/// Samples every `1/rate` s, the first at t = 0, at their own times.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Periodic {
     period_s: f64,
-    latency_s: f64,
-    quantization_m: f64,
-    /// `1 / quantization_m`, 1/m (0 without quantization): the quantizer multiplies
-    /// instead of dividing on every sample (a division was a tenth of the SIL loop's time).
-    /// The level boundaries then sit within an ulp of the exact half-multiples of the step.
-    per_quantum: f64,
-    normal: Option<Normal<f64>>,
-    rng: rand::rngs::StdRng,
     next_index: u64,
-    /// `next_index * period_s`, s (kept: the loop asks for it several times per step).
+    /// `next_index * period_s`, s (kept: a loop asks for it several times per step).
     next_time_s: f64,
-    /// Samples taken and not yet delivered, (delivery time s, value m), sample `j` in slot
-    /// `j & mask`: a ring sized once for the latency (a power of two), so a step's push and
-    /// delivery are an index and a mask (a `VecDeque` cost ~40 instructions a step).
-    pending: Box<[(f64, f32)]>,
-    mask: u64,
-    /// Index of the oldest undelivered sample (`next_index` if none).
-    delivered: u64,
-    latest: Option<(u32, f32)>,
+}
+
+impl Periodic {
+    /// Samples at `rate_hz` (> 0), the first at t = 0.
+    pub fn new(rate_hz: f64) -> Self {
+        Self {
+            period_s: 1.0 / rate_hz,
+            next_index: 0,
+            next_time_s: 0.0,
+        }
+    }
+}
+
+impl Clock for Periodic {
+    #[inline]
+    fn next_sample_time_s(&self) -> f64 {
+        self.next_time_s
+    }
+    #[inline(always)]
+    fn at_control_steps(&self) -> bool {
+        false
+    }
+    #[inline]
+    fn advance(&mut self) -> u32 {
+        let s = self.next_index as u32;
+        self.next_index += 1;
+        self.next_time_s = index_time_s(self.next_index, self.period_s);
+        s
+    }
 }
 
 /// The time of step or sample `index` at period `period_s`, s: `index as f64 * period_s`
@@ -71,63 +103,72 @@ pub fn index_time_s(index: u64, period_s: f64) -> f64 {
     index as i64 as f64 * period_s
 }
 
-/// Most samples in flight (taken, not yet delivered): the validator refuses a
-/// `sensor.latency_s` x `sensor.rate_hz` above it, so none is ever dropped.
-pub const MAX_PENDING: usize = 4096;
+/// What a sample measures of the `N` true values.
+pub trait Measure<const N: usize> {
+    /// The measured values.
+    fn measure(&mut self, truth: [f64; N]) -> [f64; N];
+}
 
-/// Ring slots for samples `latency_s` old at `rate_hz`: a power of two holding at least
-/// twice the samples in flight plus a few (at most [`MAX_PENDING`]).
-fn ring_slots(latency_s: f64, rate_hz: f64) -> usize {
-    let in_flight = (latency_s * rate_hz).ceil();
-    if in_flight.is_finite() && in_flight >= 0.0 && in_flight < MAX_PENDING as f64 {
-        (2 * in_flight as usize + 8)
-            .next_power_of_two()
-            .min(MAX_PENDING)
-    } else {
-        MAX_PENDING
+/// The true values (noise and quantization off).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Exact;
+
+impl<const N: usize> Measure<N> for Exact {
+    #[inline(always)]
+    fn measure(&mut self, truth: [f64; N]) -> [f64; N] {
+        truth
     }
 }
 
-impl SampledSensor {
-    /// A sensor sampling at `rate_hz` (> 0) with noise `sigma_m` (m), latency `latency_s`
-    /// (s) and quantization `quantization_m` (m, 0 = none), reproducible from `seed`.
-    pub fn new(rate_hz: f64, sigma_m: f64, latency_s: f64, quantization_m: f64, seed: u64) -> Self {
-        let slots = ring_slots(latency_s, rate_hz);
-        Self {
-            period_s: 1.0 / rate_hz,
-            latency_s,
-            quantization_m,
-            per_quantum: if quantization_m > 0.0 {
-                1.0 / quantization_m
-            } else {
-                0.0
-            },
-            normal: (sigma_m > 0.0)
-                .then(|| Normal::new(0.0, sigma_m).ok())
+/// One channel's noise and quantization.
+#[derive(Clone, Copy, Debug)]
+struct Channel {
+    normal: Option<Normal<f64>>,
+    step: f64,
+    /// `1 / step` (0 without quantization): the quantizer multiplies instead of dividing
+    /// on every sample (a division was a tenth of the line's SIL loop). The level
+    /// boundaries then sit within an ulp of the exact half-multiples of the step.
+    per_step: f64,
+}
+
+/// Gaussian noise and quantization per channel, reproducible from a seed.
+#[derive(Clone, Debug)]
+pub struct Measured<const N: usize> {
+    channels: [Channel; N],
+    rng: rand::rngs::StdRng,
+}
+
+impl<const N: usize> Measured<N> {
+    /// Noise with standard deviations `sigma` (per channel, in its unit; 0, negative or
+    /// not finite = none) and quantization steps `step` (per channel; 0 = none), from `seed`.
+    pub fn new(sigma: [f64; N], step: [f64; N], seed: u64) -> Self {
+        let channels = core::array::from_fn(|i| Channel {
+            normal: (sigma[i] > 0.0)
+                .then(|| Normal::new(0.0, sigma[i]).ok())
                 .flatten(),
+            step: step[i],
+            per_step: if step[i] > 0.0 { 1.0 / step[i] } else { 0.0 },
+        });
+        Self {
+            channels,
             rng: rand::rngs::StdRng::seed_from_u64(seed),
-            next_index: 0,
-            next_time_s: 0.0,
-            pending: vec![(0.0, 0.0); slots].into_boxed_slice(),
-            mask: slots as u64 - 1,
-            delivered: 0,
-            latest: None,
         }
     }
+}
 
-    fn slot(&self, index: u64) -> (f64, f32) {
-        self.pending[(index & self.mask) as usize]
-    }
-
-    fn measure(&mut self, height_m: f64) -> f32 {
-        let mut z = height_m;
-        if let Some(n) = &self.normal {
-            z += n.sample(&mut self.rng);
+impl<const N: usize> Measure<N> for Measured<N> {
+    #[inline]
+    fn measure(&mut self, truth: [f64; N]) -> [f64; N] {
+        let mut out = truth;
+        for (z, c) in out.iter_mut().zip(&self.channels) {
+            if let Some(n) = &c.normal {
+                *z += n.sample(&mut self.rng);
+            }
+            if c.step > 0.0 {
+                *z = round_half_away(*z * c.per_step) * c.step;
+            }
         }
-        if self.quantization_m > 0.0 {
-            z = round_half_away(z * self.per_quantum) * self.quantization_m;
-        }
-        z as f32
+        out
     }
 }
 
@@ -151,39 +192,232 @@ pub fn round_half_away(x: f64) -> f64 {
     ((t + step) as f64).copysign(x)
 }
 
-impl Sensor for SampledSensor {
-    #[inline]
-    fn next_sample_time_s(&self) -> f64 {
-        self.next_time_s
+/// One measured sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample<const N: usize> {
+    /// Sequence number.
+    pub seq: u32,
+    /// The measured values.
+    pub values: [f64; N],
+}
+
+/// When a sample becomes visible to the controller.
+pub trait Delay<const N: usize> {
+    /// A sample taken at `t_s`.
+    fn push(&mut self, t_s: f64, sample: Sample<N>);
+    /// The newest sample visible at `t_s` (before the first is visible: the oldest taken).
+    fn latest(&mut self, t_s: f64) -> Option<Sample<N>>;
+    /// The delay, s.
+    fn latency_s(&self) -> f64;
+}
+
+/// A sample is visible at once (the latency effect off).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NoLatency<const N: usize> {
+    last: Option<Sample<N>>,
+}
+
+impl<const N: usize> Delay<N> for NoLatency<N> {
+    #[inline(always)]
+    fn push(&mut self, _t_s: f64, sample: Sample<N>) {
+        self.last = Some(sample);
+    }
+    #[inline(always)]
+    fn latest(&mut self, _t_s: f64) -> Option<Sample<N>> {
+        self.last
+    }
+    #[inline(always)]
+    fn latency_s(&self) -> f64 {
+        0.0
+    }
+}
+
+/// Most samples in flight (taken, not yet delivered) that a validator accepts (the line's
+/// `sensor.latency_s` x `sensor.rate_hz`, the hopper's likewise): the ring holds twice as
+/// many, so none is ever dropped for an accepted scene.
+pub const MAX_PENDING: usize = 4096;
+
+/// Ring slots for samples `latency_s` old at `rate_hz`: a power of two holding at least
+/// twice the samples in flight plus a few (at most `2 MAX_PENDING`).
+fn ring_slots(latency_s: f64, rate_hz: f64) -> usize {
+    let in_flight = (latency_s * rate_hz).ceil();
+    if in_flight.is_finite() && in_flight >= 0.0 && in_flight <= MAX_PENDING as f64 {
+        (2 * in_flight as usize + 8)
+            .next_power_of_two()
+            .min(2 * MAX_PENDING)
+    } else {
+        2 * MAX_PENDING
+    }
+}
+
+/// Slack for the rounding of sample and control times, s.
+const TIME_SLACK_S: f64 = 1e-9;
+
+/// A sample is visible `latency_s` after it was taken.
+#[derive(Clone, Debug)]
+pub struct Latency<const N: usize> {
+    latency_s: f64,
+    /// Samples taken and not yet delivered, (delivery time s, sample), push `j` in slot
+    /// `j & mask`: a ring sized once for the latency (a power of two), so a push and a
+    /// delivery are an index and a mask (a `VecDeque` cost ~40 instructions a step).
+    pending: Box<[(f64, Sample<N>)]>,
+    mask: u64,
+    /// Samples pushed.
+    pushed: u64,
+    /// Index of the oldest undelivered sample (`pushed` if none).
+    delivered: u64,
+    latest: Option<Sample<N>>,
+}
+
+impl<const N: usize> Latency<N> {
+    /// A delay of `latency_s` (s, >= 0) for samples at `rate_hz` (> 0): the ring holds every
+    /// sample in flight up to [`MAX_PENDING`] (beyond, the oldest is dropped: a validated
+    /// scene never has that many).
+    pub fn new(latency_s: f64, rate_hz: f64) -> Self {
+        let slots = ring_slots(latency_s, rate_hz);
+        let empty = Sample {
+            seq: 0,
+            values: [0.0; N],
+        };
+        Self {
+            latency_s,
+            pending: vec![(0.0, empty); slots].into_boxed_slice(),
+            mask: slots as u64 - 1,
+            pushed: 0,
+            delivered: 0,
+            latest: None,
+        }
     }
 
-    fn sample(&mut self, t_s: f64, height_m: f64) {
-        let z = self.measure(height_m);
-        if self.next_index - self.delivered > self.mask {
+    fn slot(&self, index: u64) -> (f64, Sample<N>) {
+        self.pending[(index & self.mask) as usize]
+    }
+}
+
+impl<const N: usize> Delay<N> for Latency<N> {
+    #[inline]
+    fn push(&mut self, t_s: f64, sample: Sample<N>) {
+        if self.pushed - self.delivered > self.mask {
             self.delivered += 1; // full (never, for a validated scene): drop the oldest
         }
-        self.pending[(self.next_index & self.mask) as usize] = (t_s + self.latency_s, z);
-        self.next_index += 1;
-        self.next_time_s = index_time_s(self.next_index, self.period_s);
+        self.pending[(self.pushed & self.mask) as usize] = (t_s + self.latency_s, sample);
+        self.pushed += 1;
     }
 
-    fn frame(&mut self, _step: u64, t_s: f64, _height_m: f64) -> (u32, f32) {
-        // deliver everything due by now (1e-9 s of slack for the rounding of t)
-        while self.delivered < self.next_index {
-            let (due, z) = self.slot(self.delivered);
-            if due > t_s + 1e-9 {
+    #[inline]
+    fn latest(&mut self, t_s: f64) -> Option<Sample<N>> {
+        // deliver everything due by now (with slack for the rounding of t)
+        while self.delivered < self.pushed {
+            let (due, s) = self.slot(self.delivered);
+            if due > t_s + TIME_SLACK_S {
                 break;
             }
-            self.latest = Some((self.delivered as u32, z));
+            self.latest = Some(s);
             self.delivered += 1;
         }
         match self.latest {
-            Some(l) => l,
-            None if self.delivered < self.next_index => {
-                (self.delivered as u32, self.slot(self.delivered).1)
-            }
-            None => (0, f32::NAN),
+            Some(s) => Some(s),
+            None if self.delivered < self.pushed => Some(self.slot(self.delivered).1),
+            None => None,
         }
+    }
+
+    fn latency_s(&self) -> f64 {
+        self.latency_s
+    }
+}
+
+/// A sensor of `N` values: its clock, what it measures, its delay (module docs).
+#[derive(Clone, Debug, Default)]
+pub struct Sampled<const N: usize, C, M, D> {
+    clock: C,
+    measure: M,
+    delay: D,
+}
+
+impl<const N: usize, C: Clock, M: Measure<N>, D: Delay<N>> Sampled<N, C, M, D> {
+    /// The sensor of these effects.
+    pub fn with(clock: C, measure: M, delay: D) -> Self {
+        Self {
+            clock,
+            measure,
+            delay,
+        }
+    }
+
+    /// Time of the next sample between control steps, s (infinite: none).
+    #[inline]
+    pub fn next_sample_time_s(&self) -> f64 {
+        self.clock.next_sample_time_s()
+    }
+
+    /// Take a sample of `truth` at `t_s`.
+    #[inline]
+    pub fn take(&mut self, t_s: f64, truth: [f64; N]) {
+        let seq = self.clock.advance();
+        let values = self.measure.measure(truth);
+        self.delay.push(t_s, Sample { seq, values });
+    }
+
+    /// The sample a control frame at `t_s` carries (taking the step's sample of `truth`
+    /// first when the sensor samples at control steps).
+    #[inline]
+    pub fn deliver(&mut self, t_s: f64, truth: [f64; N]) -> Option<Sample<N>> {
+        if self.clock.at_control_steps() {
+            self.take(t_s, truth);
+        }
+        self.delay.latest(t_s)
+    }
+
+    /// The delay from a sample to its delivery, s.
+    #[inline]
+    pub fn latency_s(&self) -> f64 {
+        self.delay.latency_s()
+    }
+}
+
+/// The line juggler's ball sensor: sample events inside the plant, frames at control steps.
+pub trait Sensor {
+    /// Time of the next sample, s (infinite if the sensor samples only at control steps).
+    fn next_sample_time_s(&self) -> f64;
+    /// Take the sample due at `t_s` of the true height `height_m` (m).
+    fn sample(&mut self, t_s: f64, height_m: f64);
+    /// The frame content at control step `step` (time `t_s`): sequence number and the
+    /// measured height (m), given the true height now (NaN before any sample).
+    fn frame(&mut self, step: u64, t_s: f64, height_m: f64) -> (u32, f32);
+}
+
+impl<C: Clock, M: Measure<1>, D: Delay<1>> Sensor for Sampled<1, C, M, D> {
+    #[inline(always)]
+    fn next_sample_time_s(&self) -> f64 {
+        Sampled::next_sample_time_s(self)
+    }
+    #[inline]
+    fn sample(&mut self, t_s: f64, height_m: f64) {
+        self.take(t_s, [height_m]);
+    }
+    #[inline]
+    fn frame(&mut self, _step: u64, t_s: f64, height_m: f64) -> (u32, f32) {
+        self.deliver(t_s, [height_m])
+            .map_or((0, f32::NAN), |s| (s.seq, s.values[0] as f32))
+    }
+}
+
+/// The true height at every control step, sequence number = step: the sensor off.
+pub type PerfectSensor = Sampled<1, AtControlSteps, Exact, NoLatency<1>>;
+
+/// The ball height sampled at a rate with noise, quantization and latency.
+pub type SampledSensor = Sampled<1, Periodic, Measured<1>, Latency<1>>;
+
+impl SampledSensor {
+    /// A sensor sampling at `rate_hz` (> 0) with noise `sigma_m` (m), latency `latency_s`
+    /// (s) and quantization `quantization_m` (m, 0 = none), reproducible from `seed`.
+    pub fn new(rate_hz: f64, sigma_m: f64, latency_s: f64, quantization_m: f64, seed: u64) -> Self {
+        Sampled::with(
+            Periodic::new(rate_hz),
+            Measured::new([sigma_m], [quantization_m], seed),
+            Latency::new(latency_s, rate_hz),
+        )
     }
 }
 
@@ -262,11 +496,11 @@ mod tests {
         let mut rng = rand::rngs::StdRng::seed_from_u64(11);
         let mut near_half = 0;
         for q in [1e-4, 1e-3, 3e-4, 0.01, 7.3e-5] {
-            let s = SampledSensor::new(1000.0, 0.0, 0.0, q, 1);
+            let mut s = SampledSensor::new(1000.0, 0.0, 0.0, q, 1);
             for _ in 0..20_000 {
                 let z: f64 = rng.random_range(-2.0..2.0);
                 let exact = z / q;
-                let got = round_half_away(z * s.per_quantum) * q;
+                let got = s.measure.measure([z])[0];
                 let want = round_half_away(exact) * q;
                 if (exact.abs().fract() - 0.5).abs() < 1e-12 * exact.abs().max(1.0) {
                     near_half += 1;
@@ -277,6 +511,29 @@ mod tests {
             }
         }
         assert!(near_half < 10, "{near_half}");
+    }
+
+    #[test]
+    fn the_perfect_sensor_is_the_truth_now_and_costs_nothing() {
+        let mut s = PerfectSensor::default();
+        assert_eq!(s.next_sample_time_s(), f64::INFINITY);
+        for k in 0..3u64 {
+            let h = 0.1 * k as f64;
+            assert_eq!(s.frame(k, 0.002 * k as f64, h), (k as u32, h as f32));
+        }
+        assert_eq!(std::mem::size_of::<Exact>(), 0);
+    }
+
+    #[test]
+    fn channels_draw_in_order_and_skip_the_quiet_ones() {
+        // channel 1 has no noise: the generator's draws go to channels 0 and 2, in order,
+        // so channel 2 of a three-channel sensor gets the second draw of a one-channel one
+        let mut three = Measured::new([0.1, 0.0, 0.1], [0.0; 3], 9);
+        let mut one = Measured::new([0.1], [0.0], 9);
+        let z = three.measure([0.0, 5.0, 0.0]);
+        let a = one.measure([0.0])[0];
+        let b = one.measure([0.0])[0];
+        assert_eq!(z, [a, 5.0, b]);
     }
 
     #[test]

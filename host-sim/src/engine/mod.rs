@@ -1,9 +1,12 @@
-//! Event-driven physics of a ball on a vertical line: closed-form flight between events,
-//! robust contact roots, the restitution map, Zeno detection, and numerical integration
-//! (with event location) only for effects without a closed form.
+//! Event-driven physics: closed-form flight between events, robust contact roots, the
+//! restitution map, Zeno detection, and the one ODE engine ([`ode`]: RK4 or Dormand–Prince
+//! 5(4), events as witness functions located by the engine) for every effect without a
+//! closed form (the line's drag, [`drag`]; the hopper's stance; the arm's joint and roll).
 
+pub mod drag;
 pub mod flight;
-pub mod integrate;
+pub mod locate;
+pub mod ode;
 pub mod roots;
 pub mod zeno;
 

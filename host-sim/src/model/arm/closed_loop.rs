@@ -17,6 +17,7 @@ use super::planner::Plan;
 use super::simulate::{execute, Executed, GoalError};
 use super::{ArmError, ArmScene};
 use crate::controller::{Sil, StepController};
+use crate::engine::ode::{fixed_steps, Rk4, State};
 use dexter_core::arm_control::{ArmController, ArmFrame};
 use dexter_core::fixed_rate::{Fault, Mode};
 use serde::Serialize;
@@ -45,17 +46,8 @@ impl JointPlant {
 
     /// The joint after `h` seconds under constant torque `tau`, by RK4 in `n` steps.
     fn advance(&self, angle: f64, vel: f64, tau: f64, h: f64, n: usize) -> (f64, f64) {
-        let (mut x, mut v) = (angle, vel);
-        let dt = h / n as f64;
-        for _ in 0..n {
-            let (k1x, k1v) = (v, self.accel(x, tau));
-            let (k2x, k2v) = (v + 0.5 * dt * k1v, self.accel(x + 0.5 * dt * k1x, tau));
-            let (k3x, k3v) = (v + 0.5 * dt * k2v, self.accel(x + 0.5 * dt * k2x, tau));
-            let (k4x, k4v) = (v + dt * k3v, self.accel(x + dt * k3x, tau));
-            x += dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
-            v += dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
-        }
-        (x, v)
+        let accel = |_: f64, y: State| self.accel(y.0, tau);
+        fixed_steps(Rk4, &accel, 0.0, (angle, vel), h, n)
     }
 }
 

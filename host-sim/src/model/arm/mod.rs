@@ -12,7 +12,6 @@
 //! | [`task`] | the four tasks as phase sequences (g, gf, grg, grf) and their goals |
 //! | [`params`] | the scene's tables, validation naming the dotted key |
 //! | [`motion`] | joint motions: the planned spline with its release brake |
-//! | [`ode`] | the RK4 step of the roll |
 //! | [`planner`] | design vector, sec. 2.2 constraints, shooting seeds, SLSQP / ALM |
 //! | [`simulate`] | the event-driven verifier and its verdicts |
 //! | [`closed_loop`] | the plan tracked by the core's `ArmController` (SIL), then verified |
@@ -51,7 +50,6 @@ pub mod contact;
 pub mod examples;
 pub mod geometry;
 pub mod motion;
-pub mod ode;
 pub mod params;
 pub mod planner;
 pub mod simulate;

@@ -14,9 +14,10 @@
 //! all. The model therefore always integrates its two spring phases, and the tests check
 //! the integration against that energy integral.
 
-use super::integrate::{integrate_to_event, Integrator, Outcome};
 use super::linear::{ev, thrust_phase};
 use super::{Entry, HopperError, RunEnd, Sampler, Stance, StanceResult};
+use super::{Integrator, MAX_STEPS_PER_PHASE};
+use crate::engine::ode::{End, State};
 use dexter_core::hop::{RaibertThrust, StancePhase};
 use dexter_core::params::{non_negative, positive};
 
@@ -99,19 +100,26 @@ impl FullNonlinear {
                 if y0.1 == 0.0 && a0 >= 0.0 {
                     ev(td.time_s, td.height_m, 0.0)
                 } else {
-                    let acc = |y: (f64, f64)| eta1 / y.0 - gamma * y.1 - g;
+                    let acc = |_: f64, y: State| eta1 / y.0 - gamma * y.1 - g;
                     buf.clear();
                     if sampling {
                         buf.push((0.0, y0));
                     }
-                    let (out, n) =
-                        integrate_to_event(self.integrator, &acc, y0, &[&|y| y.1], &mut |t, y| {
+                    let bottom = |_: f64, y: State| y.1;
+                    let (out, n) = self.integrator.integrate(
+                        MAX_STEPS_PER_PHASE,
+                        &acc,
+                        y0,
+                        f64::INFINITY,
+                        &[&bottom as &dyn Fn(f64, State) -> f64][..],
+                        &mut |t, y| {
                             if sampling {
                                 buf.push((t, y));
                             }
-                        });
+                        },
+                    );
                     steps += n;
-                    let Outcome::Event { dt_s, state, .. } = out else {
+                    let End::Event { dt_s, state, .. } = out else {
                         return Err(RunEnd::StepCap);
                     };
                     emit(s, StancePhase::Compression, td.time_s, &buf);
@@ -131,23 +139,29 @@ impl FullNonlinear {
             });
         }
         let eta2 = thrust.thrust_mps2() * et.height_m;
-        let acc = |y: (f64, f64)| eta2 / y.0 - gamma * y.1 - g;
+        let acc = |_: f64, y: State| eta2 / y.0 - gamma * y.1 - g;
         let y0 = (et.height_m, et.velocity_mps);
         buf.clear();
         if sampling {
             buf.push((0.0, y0));
         }
-        let lift = |y: (f64, f64)| y.0 - chi_l;
-        let turned = |y: (f64, f64)| -y.1;
-        let (out, n) =
-            integrate_to_event(self.integrator, &acc, y0, &[&lift, &turned], &mut |t, y| {
+        let lift = |_: f64, y: State| y.0 - chi_l;
+        let turned = |_: f64, y: State| -y.1;
+        let (out, n) = self.integrator.integrate(
+            MAX_STEPS_PER_PHASE,
+            &acc,
+            y0,
+            f64::INFINITY,
+            &[&lift as &dyn Fn(f64, State) -> f64, &turned][..],
+            &mut |t, y| {
                 if sampling {
                     buf.push((t, y));
                 }
-            });
+            },
+        );
         steps += n;
         match out {
-            Outcome::Event {
+            End::Event {
                 index: 0,
                 dt_s,
                 state,
@@ -162,8 +176,8 @@ impl FullNonlinear {
                     energy: (chi_l / bottom.height_m).ln(),
                 })
             }
-            Outcome::Event { .. } => Err(RunEnd::NoLiftoff),
-            Outcome::StepCap => Err(RunEnd::StepCap),
+            End::Event { .. } => Err(RunEnd::NoLiftoff),
+            End::StepCap { .. } | End::Span(_) => Err(RunEnd::StepCap),
         }
     }
 }

@@ -28,7 +28,6 @@
 pub mod analysis;
 pub mod eq17;
 pub mod full;
-pub mod integrate;
 pub mod linear;
 pub mod nonlinear;
 pub mod params;
@@ -36,10 +35,15 @@ pub mod sampled;
 pub mod valve;
 
 pub use full::FullNonlinear;
-pub use integrate::Integrator;
 pub use linear::LinearSpring;
 pub use nonlinear::SimplifiedNonlinear;
 pub use params::HopperParams;
+
+use crate::engine::ode::Integrator;
+
+/// Most integrator steps in one stance phase (full model); the run ends with
+/// [`RunEnd::StepCap`] beyond.
+pub const MAX_STEPS_PER_PHASE: u64 = 10_000_000;
 
 use dexter_core::hop::{flight_energy_jpkg, EnergyServoThrust, RaibertThrust, StancePhase};
 use dexter_core::params::ParamError;
@@ -198,7 +202,7 @@ pub enum RunEnd {
     /// spring support (linear with delta > 0, full): the body would sink during the thrust;
     /// the cycle is not recorded.
     WeakThrust,
-    /// An integrator hit [`integrate::MAX_STEPS_PER_PHASE`] (full model only).
+    /// An integrator hit [`MAX_STEPS_PER_PHASE`] (full model only).
     StepCap,
     /// A state, or a requested time, became non-finite (e.g. the decompression time from
     /// a bottom deeper than chi_l e^-745, where x_n underflows to 0); the cycle is not

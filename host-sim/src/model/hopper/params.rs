@@ -9,7 +9,7 @@ use super::{
     Start, ThrustLaw,
 };
 use dexter_core::hop::{EnergyServoThrust, RaibertThrust};
-use dexter_core::params::{finite, ParamError};
+use dexter_core::params::{finite, positive, ParamError};
 use serde::Deserialize;
 
 /// `value` is finite, else a [`HopperError`] naming `name`.
@@ -188,8 +188,13 @@ impl HopperParams {
             }
             ModelKind::Full => {
                 let integrator = match self.integrator {
-                    IntegratorKind::Rk4 => Integrator::rk4(self.step_s)?,
-                    IntegratorKind::Rk45 => Integrator::rk45(self.tolerance_m, self.step_s)?,
+                    IntegratorKind::Rk4 => Integrator::Rk4 {
+                        step_s: positive("hopper.step_s", self.step_s)?,
+                    },
+                    IntegratorKind::Rk45 => Integrator::Rk45 {
+                        tolerance_m: positive("hopper.tolerance_m", self.tolerance_m)?,
+                        initial_step_s: positive("hopper.step_s", self.step_s)?,
+                    },
                 };
                 HopperModel::Full(FullNonlinear::new(
                     self.liftoff_height_m,

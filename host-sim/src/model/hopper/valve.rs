@@ -12,7 +12,7 @@
 //! | flight | chi'' = -g | closed form; touchdown at chi = chi_l, apex at chi' = 0 |
 //! | stance, valve open (thrust) | chi'' = tau - gamma chi' - g | closed form ([`super::linear::thrust_motion`], eq. 24 re-derived); the velocity has at most one zero (bottom or turn); liftoff by bisection on a rising stretch |
 //! | stance, valve closed, linear | chi'' = eta1 (chi_0 - chi) - gamma chi' - g | closed form ([`LinearSpring::free_motion`]); velocity zeros in closed form every pi/omega; liftoff by bisection on a rising stretch |
-//! | stance, valve closed, full | chi'' = eta/chi - gamma chi' - g | **integrated** ([`integrate_span`]), events (liftoff, bottom, turn) located by bisection |
+//! | stance, valve closed, full | chi'' = eta/chi - gamma chi' - g | **integrated** ([`crate::engine::ode`]), events (liftoff, bottom, turn) located by bisection |
 //!
 //! **The valve in the full model.** The leg is a pneumatic cylinder (sec. 3.1): in flight it
 //! is connected to the touchdown pressure, so a stance starts with the sealed-gas constant
@@ -26,9 +26,10 @@
 //! the valve still open this is the early liftoff that Corollary 8 excludes; it is flagged);
 //! the leg pickup of eq. 7 scales the velocity by 1 / (1 + mu').
 
-use super::integrate::{integrate_span, SpanOutcome};
 use super::linear::{bisect_rising, thrust_motion};
+use super::MAX_STEPS_PER_PHASE;
 use super::{FullNonlinear, LinearSpring};
+use crate::engine::ode::{End, State};
 
 /// Most pieces (contact changes, bottoms, turns) within one call of
 /// [`ValvePlant::advance_to`]; more means the control period spans many oscillations.
@@ -116,7 +117,7 @@ pub enum TrueEvent {
 pub enum PlantError {
     /// The state became non-finite, or the full model's body reached chi <= 0.
     NonFinite,
-    /// The full model's integrator took [`super::integrate::MAX_STEPS_PER_PHASE`] steps in
+    /// The full model's integrator took [`super::MAX_STEPS_PER_PHASE`] steps in
     /// one piece.
     StepCap,
     /// More than [`MAX_PIECES`] pieces in one call.
@@ -432,23 +433,31 @@ impl ValvePlant {
             m.gravity_mps2(),
             m.liftoff_m(),
         );
-        let acc = |y: (f64, f64)| eta / y.0 - gamma * y.1 - g;
-        let lift = |y: (f64, f64)| y.0 - chi_l;
-        let bottom = |y: (f64, f64)| y.1;
-        let turn = |y: (f64, f64)| -y.1;
+        let acc = |_: f64, y: State| eta / y.0 - gamma * y.1 - g;
+        let lift = |_: f64, y: State| y.0 - chi_l;
+        let bottom = |_: f64, y: State| y.1;
+        let turn = |_: f64, y: State| -y.1;
         let falling = s.velocity_mps < 0.0;
-        let second: &dyn Fn((f64, f64)) -> f64 = if falling { &bottom } else { &turn };
+        let second: &dyn Fn(f64, State) -> f64 = if falling { &bottom } else { &turn };
         let y0 = (s.height_m, s.velocity_mps);
-        let (out, n) = integrate_span(m.integrator(), &acc, y0, span, &[&lift, second]);
+        let events = [&lift as &dyn Fn(f64, State) -> f64, second];
+        let (out, n) = m.integrator().integrate(
+            MAX_STEPS_PER_PHASE,
+            &acc,
+            y0,
+            span,
+            &events[..],
+            &mut |_, _| {},
+        );
         self.steps += n;
         match out {
-            SpanOutcome::StepCap => Err(PlantError::StepCap),
-            SpanOutcome::End(y) => {
+            End::StepCap { .. } => Err(PlantError::StepCap),
+            End::Span(y) => {
                 self.state.time_s = s.time_s + span;
                 (self.state.height_m, self.state.velocity_mps) = y;
                 self.check_full()
             }
-            SpanOutcome::Event {
+            End::Event {
                 index: 0,
                 dt_s,
                 state,
@@ -456,7 +465,7 @@ impl ValvePlant {
                 self.lift_off(s.time_s, dt_s, state.1, on_event);
                 Ok(())
             }
-            SpanOutcome::Event { dt_s, state, .. } => {
+            End::Event { dt_s, state, .. } => {
                 if falling {
                     on_event(TrueEvent::Bottom {
                         time_s: s.time_s + dt_s,

@@ -1,6 +1,7 @@
 //! The camera the tilt controller sees: the body's pose (x, y, theta) with rate, noise,
 //! latency and quantization.
 //!
+//! Both are the one sampled sensor ([`crate::effects::sensor::Sampled`]) of three channels.
 //! [`PerfectCamera`]: the true pose at every control step (as f32), sequence number = step,
 //! no latency: the "off" effect, which costs nothing. [`SampledCamera`]: samples every
 //! `1/rate` s (sample times are events of the plant, so the pose is exact at the sample
@@ -11,44 +12,45 @@
 //! sample 0 (its value and number): the controller sees it as one sample, then as stale
 //! repeats.
 
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
-use std::collections::VecDeque;
+use crate::effects::sensor::{
+    AtControlSteps, Clock, Delay, Exact, Latency, Measure, Measured, NoLatency, Periodic, Sampled,
+};
 
 /// A camera: sample events inside the plant, frames at control steps.
 pub trait Camera {
-    /// Time of the next sample, s (infinite if the camera samples only at control steps).
+    /// Time of the next sample, s (infinite for a camera that samples at control steps).
     fn next_sample_time_s(&self) -> f64;
-    /// Take the sample due at `t_s` of the true pose (x m, y m, theta rad).
+    /// Take the sample due at `t_s` of the true pose `[x m, y m, theta rad]`.
     fn sample(&mut self, t_s: f64, pose: [f64; 3]);
-    /// The frame content at control step `step` (time `t_s`): sequence number and measured
-    /// pose, given the true pose now.
+    /// The frame content at control step `step` (time `t_s`): sequence number and the
+    /// measured pose, given the true pose now (NaN before any sample).
     fn frame(&mut self, step: u64, t_s: f64, pose: [f64; 3]) -> (u32, [f32; 3]);
-    /// Age of the newest sample when it reaches the controller, s (what the controller's
-    /// `estimator.latency_s` must be).
+    /// The camera's latency, s.
     fn latency_s(&self) -> f64;
 }
 
-/// The true pose at every control step, sequence number = step, no latency.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PerfectCamera;
-
-impl Camera for PerfectCamera {
-    #[inline(always)]
+impl<C: Clock, M: Measure<3>, D: Delay<3>> Camera for Sampled<3, C, M, D> {
+    #[inline]
     fn next_sample_time_s(&self) -> f64 {
-        f64::INFINITY
+        Sampled::next_sample_time_s(self)
     }
-    #[inline(always)]
-    fn sample(&mut self, _: f64, _: [f64; 3]) {}
-    #[inline(always)]
-    fn frame(&mut self, step: u64, _: f64, pose: [f64; 3]) -> (u32, [f32; 3]) {
-        (step as u32, pose.map(|v| v as f32))
+    #[inline]
+    fn sample(&mut self, t_s: f64, pose: [f64; 3]) {
+        self.take(t_s, pose);
     }
-    #[inline(always)]
+    #[inline]
+    fn frame(&mut self, _step: u64, t_s: f64, pose: [f64; 3]) -> (u32, [f32; 3]) {
+        self.deliver(t_s, pose)
+            .map_or((0, [f32::NAN; 3]), |s| (s.seq, s.values.map(|v| v as f32)))
+    }
+    #[inline]
     fn latency_s(&self) -> f64 {
-        0.0
+        Sampled::latency_s(self)
     }
 }
+
+/// The true pose at every control step, sequence number = step: the camera off.
+pub type PerfectCamera = Sampled<3, AtControlSteps, Exact, NoLatency<3>>;
 
 /// A camera's settings (the scene's camera table).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -71,7 +73,7 @@ pub struct CameraConfig {
 }
 
 impl CameraConfig {
-    /// The camera issue 11 asks for: 500 Hz, 1 mm and 5 mrad noise, 4 ms latency,
+    /// A realistic camera for the tilt table: 500 Hz, 1 mm and 5 mrad noise, 4 ms latency,
     /// 0.1 mm and 1 mrad quantization.
     pub fn realistic(seed: u64) -> Self {
         Self {
@@ -87,97 +89,18 @@ impl CameraConfig {
 }
 
 /// A sampled camera with noise, quantization and latency.
-#[derive(Clone, Debug)]
-pub struct SampledCamera {
-    config: CameraConfig,
-    period_s: f64,
-    position_noise: Option<Normal<f64>>,
-    angle_noise: Option<Normal<f64>>,
-    rng: rand::rngs::StdRng,
-    next_index: u64,
-    /// (delivery time, sequence, pose)
-    pending: VecDeque<(f64, u32, [f32; 3])>,
-    latest: Option<(u32, [f32; 3])>,
-}
-
-/// Most samples in flight (delivered later); older ones are dropped.
-const MAX_PENDING: usize = 4096;
+pub type SampledCamera = Sampled<3, Periodic, Measured<3>, Latency<3>>;
 
 impl SampledCamera {
     /// A camera from `config` (validated by the caller: rate > 0, the rest >= 0).
     pub fn new(config: CameraConfig) -> Self {
-        let normal = |s: f64| (s > 0.0).then(|| Normal::new(0.0, s).ok()).flatten();
-        Self {
-            config,
-            period_s: 1.0 / config.rate_hz,
-            position_noise: normal(config.noise_m),
-            angle_noise: normal(config.noise_rad),
-            rng: rand::rngs::StdRng::seed_from_u64(config.seed),
-            next_index: 0,
-            pending: VecDeque::new(),
-            latest: None,
-        }
-    }
-
-    fn measure(&mut self, pose: [f64; 3]) -> [f32; 3] {
-        let c = self.config;
-        let mut out = [0.0f32; 3];
-        for (k, (o, v)) in out.iter_mut().zip(pose).enumerate() {
-            let (noise, q) = if k < 2 {
-                (self.position_noise, c.quantization_m)
-            } else {
-                (self.angle_noise, c.quantization_rad)
-            };
-            let mut z = v;
-            if let Some(n) = noise {
-                z += n.sample(&mut self.rng);
-            }
-            if q > 0.0 {
-                z = (z / q).round() * q;
-            }
-            *o = z as f32;
-        }
-        out
-    }
-}
-
-impl Camera for SampledCamera {
-    fn next_sample_time_s(&self) -> f64 {
-        self.next_index as f64 * self.period_s
-    }
-
-    fn sample(&mut self, t_s: f64, pose: [f64; 3]) {
-        let z = self.measure(pose);
-        let seq = self.next_index as u32;
-        if self.pending.len() >= MAX_PENDING {
-            self.pending.pop_front();
-        }
-        self.pending
-            .push_back((t_s + self.config.latency_s, seq, z));
-        self.next_index += 1;
-    }
-
-    fn frame(&mut self, _step: u64, t_s: f64, _pose: [f64; 3]) -> (u32, [f32; 3]) {
-        // deliver everything due by now (1e-9 s of slack for the rounding of t)
-        while let Some(&(due, seq, z)) = self.pending.front() {
-            if due <= t_s + 1e-9 {
-                self.latest = Some((seq, z));
-                self.pending.pop_front();
-            } else {
-                break;
-            }
-        }
-        match self.latest {
-            Some(l) => l,
-            None => self
-                .pending
-                .front()
-                .map_or((0, [f32::NAN; 3]), |&(_, s, z)| (s, z)),
-        }
-    }
-
-    fn latency_s(&self) -> f64 {
-        self.config.latency_s
+        let (m, rad) = (config.noise_m, config.noise_rad);
+        let (qm, qrad) = (config.quantization_m, config.quantization_rad);
+        Sampled::with(
+            Periodic::new(config.rate_hz),
+            Measured::new([m, m, rad], [qm, qm, qrad], config.seed),
+            Latency::new(config.latency_s, config.rate_hz),
+        )
     }
 }
 
@@ -252,7 +175,11 @@ mod tests {
 
     #[test]
     fn perfect_camera_is_the_truth_now() {
-        let mut c = PerfectCamera;
+        // one frame per control step from step 0: the sequence number is the step
+        let mut c = PerfectCamera::default();
+        for k in 0..7 {
+            c.frame(k, 0.002 * k as f64, [0.0; 3]);
+        }
         assert_eq!(
             c.frame(7, 0.014, [0.5, 0.25, -0.125]),
             (7, [0.5, 0.25, -0.125])

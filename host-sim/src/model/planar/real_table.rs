@@ -283,7 +283,7 @@ pub fn stream_real_table<T: SinCos>(
     sink: &mut dyn TableSink,
 ) -> Result<TableRun, ControllerError> {
     match table.camera {
-        None => with_tilt(cfg, table, ctrl, PerfectCamera, sink),
+        None => with_tilt(cfg, table, ctrl, PerfectCamera::default(), sink),
         Some(c) => with_tilt(cfg, table, ctrl, SampledCamera::new(c), sink),
     }
 }

@@ -10,7 +10,7 @@ use crate::controller::{Sil, StepController};
 use crate::effects::actuator::{IdealActuator, SecondOrderActuator};
 use crate::effects::jitter::{GaussianJitter, Jitter, NoJitter};
 use crate::effects::sensor::{PerfectSensor, SampledSensor};
-use crate::engine::integrate::{DragFlight, Rk4, Rk45};
+use crate::engine::drag::{DragFlight, Rk4, Rk45};
 use crate::engine::zeno::ZenoPolicy;
 use crate::engine::{Ballistic, Flight};
 use crate::model::line::LinePlant;
@@ -147,7 +147,7 @@ fn sensed<F: Flight, S: Surface, J: Jitter, C: StepController + ?Sized>(
     plant: LinePlant<F, S, J>,
 ) -> Result<(), RunError> {
     match &s.sensor {
-        None => stepped_run(s, o, ctrl, plant, PerfectSensor, rec),
+        None => stepped_run(s, o, ctrl, plant, PerfectSensor::default(), rec),
         Some(x) => {
             let rate = x.rate_hz.unwrap_or(s.control.rate_hz);
             let sensor =

@@ -21,10 +21,10 @@
 use super::super::contact::{BodyState, Joint, Pivot, Placement};
 use super::super::geometry::V2;
 use super::super::motion::{ArmMotion, PlannedMotion};
-use super::super::ode::rk4_step;
 use super::super::task::Phase;
 use super::super::ArmScene;
 use super::layout::{Design, Layout};
+use crate::engine::ode::{Method, Rk4, State};
 use serde::Serialize;
 
 /// What a constraint row constrains (for reporting the ones a plan violates).
@@ -355,13 +355,13 @@ impl<'a> Problem<'a> {
         let rig = &self.sys.rig;
         let n = self.sys.planner.roll_steps;
         let h = dur / n as f64;
-        let acc = |t: f64, psi: f64, w: f64| rig.roll(pv, psi, w, &m.joint(t)).psi_accel_radps2;
+        let acc = |t: f64, y: State| rig.roll(pv, y.0, y.1, &m.joint(t)).psi_accel_radps2;
         let (mut psi, mut w) = (0.0, 0.0);
         let mut tq = Vec::with_capacity(n + 1);
         for i in 0..=n {
             let t = t0 + h * i as f64;
             if i > 0 {
-                (psi, w) = rk4_step(&acc, t - h, psi, w, h);
+                (psi, w) = Rk4.step(&acc, t - h, (psi, w), h).0;
             }
             let j = m.joint(t);
             let r = rig.roll(pv, psi, w, &j);

@@ -1,16 +1,18 @@
 //! One step of each phase, with its events located inside the step.
 //!
 //! Grasp: no state of its own (the object moves with the arm); each condition is a
-//! function of time, and a sign change inside a step is located by bisection. Roll: the
-//! state (psi, psi') is integrated by RK4; an event inside a step is located by bisection
-//! on the step length, re-integrating from the step's start. Flight is closed form.
+//! function of time, and a sign change inside a step is located by the engine's bisection
+//! ([`crate::engine::locate`]). Roll: the state (psi, psi') is integrated by the engine's
+//! RK4 ([`crate::engine::ode`]); an event inside a step is located by the same bisection on
+//! the time, re-integrating from the step's start. Flight is closed form.
 
 use super::super::contact::{BodyState, Joint, Pivot, Placement, Rig};
 use super::super::motion::ArmMotion;
-use super::super::ode::rk4_step;
+use crate::engine::locate::bisect;
+use crate::engine::ode::{Method, Rk4, State};
 
 /// Bisection iterations for an event inside a step (2^-40 of the step).
-const BISECTIONS: usize = 40;
+const BISECTIONS: u32 = 40;
 
 /// What ended a grasp step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,17 +49,8 @@ pub fn grasp_step(
             None
         }
     };
-    fail(t1)?;
-    let (mut lo, mut hi) = (t0, t1);
-    for _ in 0..BISECTIONS {
-        let mid = 0.5 * (lo + hi);
-        if fail(mid).is_some() {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    fail(hi).map(|e| (hi, e))
+    let at_end = fail(t1)?;
+    Some(bisect((t0, t1), at_end, BISECTIONS, fail))
 }
 
 /// What ended a roll step.
@@ -84,8 +77,8 @@ fn roll_advance(
     s: RollState,
     h: f64,
 ) -> RollState {
-    let acc = |t: f64, psi: f64, w: f64| rig.roll(pv, psi, w, &arm.joint(t)).psi_accel_radps2;
-    rk4_step(&acc, t0, s.0, s.1, h)
+    let acc = |t: f64, y: State| rig.roll(pv, y.0, y.1, &arm.joint(t)).psi_accel_radps2;
+    Rk4.step(&acc, t0, s, h).0
 }
 
 fn roll_fail(rig: &Rig, pv: &Pivot, j: &Joint, s: RollState, mu: f64) -> Option<RollEvent> {
@@ -120,20 +113,15 @@ pub fn roll_step(
         (s1, roll_fail(rig, pv, &arm.joint(t), s1, mu))
     };
     let (s1, e) = at(t1);
-    if e.is_none() {
+    let Some(e) = e else {
         return (t1, s1, None);
-    }
-    let (mut lo, mut hi) = (t0, t1);
-    for _ in 0..BISECTIONS {
-        let mid = 0.5 * (lo + hi);
-        if at(mid).1.is_some() {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    let (s_hi, e_hi) = at(hi);
-    (hi, s_hi, e_hi)
+    };
+    let first = |t: f64| match at(t) {
+        (s, Some(e)) => Some((s, e)),
+        (_, None) => None,
+    };
+    let (hi, (s_hi, e_hi)) = bisect((t0, t1), (s1, e), BISECTIONS, first);
+    (hi, s_hi, Some(e_hi))
 }
 
 /// Lowest height of the object's vertices above the arm's surface, over the surface's

@@ -43,8 +43,7 @@ use dexter_core::hop::{EnergyServoThrust, RaibertThrust, StancePhase};
 use dexter_core::hop_control::{HopController, HopParams, HopThrust};
 use dexter_core::params::ParamError;
 use sensor::{
-    AtControlSteps, Clock, Delay, GaussianNoise, HopSensor, Latency, NoLatency, NoNoise,
-    NoQuantization, Noise, Periodic, Quantization, Quantizer, Truth,
+    AtControlSteps, Clock, Delay, Exact, HopSensor, Latency, Measure, NoLatency, Periodic, Truth,
 };
 use serde::Serialize;
 use tracker::Tracker;
@@ -608,64 +607,39 @@ pub fn run_sampled_with(
 ) -> Result<SampledRun, SampledError> {
     cfg.validate()?;
     let s = &cfg.sensor;
-    let noisy = s.compression_noise_m > 0.0 || s.height_noise_m > 0.0;
+    let exact = s.compression_noise_m <= 0.0 && s.height_noise_m <= 0.0 && s.quantization_m <= 0.0;
     let (c, k) = (controller, on_cycle);
-    match (s.rate_hz, noisy) {
-        (None, false) => with_quantizer(cfg, c, k, AtControlSteps::default(), NoNoise),
-        (None, true) => with_quantizer(cfg, c, k, AtControlSteps::default(), noise(s)),
-        (Some(r), false) => with_quantizer(cfg, c, k, Periodic::new(r), NoNoise),
-        (Some(r), true) => with_quantizer(cfg, c, k, Periodic::new(r), noise(s)),
+    match (s.rate_hz, exact) {
+        (None, true) => with_delay(cfg, c, k, AtControlSteps::default(), Exact),
+        (None, false) => with_delay(cfg, c, k, AtControlSteps::default(), measured(s)),
+        (Some(r), true) => with_delay(cfg, c, k, Periodic::new(r), Exact),
+        (Some(r), false) => with_delay(cfg, c, k, Periodic::new(r), measured(s)),
     }
 }
 
-fn noise(s: &SensorConfig) -> GaussianNoise {
-    GaussianNoise::new(s.compression_noise_m, s.height_noise_m, s.seed)
+fn measured(s: &SensorConfig) -> sensor::Measured<3> {
+    let (c, h, q) = (s.compression_noise_m, s.height_noise_m, s.quantization_m);
+    sensor::measured(c, h, q, s.seed)
 }
 
 type Sink<'a> = &'a mut dyn FnMut(&SampledCycle);
 
-fn with_quantizer<C: Clock, N: Noise>(
+fn with_delay<C: Clock, M: Measure<3>>(
     cfg: &SampledConfig,
     ctrl: &mut dyn StepController<HopController>,
     sink: Sink<'_>,
     clock: C,
-    noise: N,
-) -> Result<SampledRun, SampledError> {
-    let q = cfg.sensor.quantization_m;
-    if q > 0.0 {
-        with_delay(cfg, ctrl, sink, clock, noise, Quantization { step_m: q })
-    } else {
-        with_delay(cfg, ctrl, sink, clock, noise, NoQuantization)
-    }
-}
-
-fn with_delay<C: Clock, N: Noise, Q: Quantizer>(
-    cfg: &SampledConfig,
-    ctrl: &mut dyn StepController<HopController>,
-    sink: Sink<'_>,
-    clock: C,
-    noise: N,
-    quantizer: Q,
+    measure: M,
 ) -> Result<SampledRun, SampledError> {
     let s = &cfg.sensor;
     let h = s.body_height;
     if s.latency_s > 0.0 {
-        let period = 1.0 / s.rate_hz.unwrap_or(1.0 / cfg.dt_s());
-        let delay = Latency::new(s.latency_s, period);
-        stepped(
-            cfg,
-            ctrl,
-            sink,
-            HopSensor::new(clock, noise, quantizer, delay, h),
-        )
+        let rate = s.rate_hz.unwrap_or(1.0 / cfg.dt_s());
+        let delay = Latency::new(s.latency_s, rate);
+        stepped(cfg, ctrl, sink, HopSensor::new(clock, measure, delay, h))
     } else {
         let delay = NoLatency::default();
-        stepped(
-            cfg,
-            ctrl,
-            sink,
-            HopSensor::new(clock, noise, quantizer, delay, h),
-        )
+        stepped(cfg, ctrl, sink, HopSensor::new(clock, measure, delay, h))
     }
 }
 
@@ -690,11 +664,11 @@ fn true_phase(plant: &ValvePlant) -> StancePhase {
 }
 
 /// The fixed-rate loop.
-fn stepped<C: Clock, N: Noise, Q: Quantizer, D: Delay>(
+fn stepped<C: Clock, M: Measure<3>, D: Delay<3>>(
     cfg: &SampledConfig,
     ctrl: &mut dyn StepController<HopController>,
     sink: Sink<'_>,
-    mut sensor: HopSensor<C, N, Q, D>,
+    mut sensor: HopSensor<C, M, D>,
 ) -> Result<SampledRun, SampledError> {
     let dt = cfg.dt_s();
     let max_thrust = f64::from(cfg.control.thrust.max_thrust_mps2());

@@ -1,22 +1,20 @@
 //! The hopper's sensor: leg compression, foot switch and (optionally) body height, sampled
-//! at a rate, with noise, quantization and latency. Each effect is a type parameter with a
-//! zero-sized "off" type, so a plant assembled without it pays nothing:
+//! at a rate, with noise, quantization and latency: the one sampled sensor
+//! ([`crate::effects::sensor::Sampled`]) of three channels (compression, foot switch as 0
+//! or 1, height), each effect a type parameter with a zero-sized "off" type, so a plant
+//! assembled without it pays nothing (rate: [`AtControlSteps`] or [`Periodic`]; noise and
+//! quantization: [`Exact`] or [`Measured`]; latency: [`NoLatency`] or [`Latency`]).
 //!
-//! | effect | off | on |
-//! | --- | --- | --- |
-//! | rate | [`AtControlSteps`]: one sample at every control step, sequence number = step | [`Periodic`]: samples every 1/rate s, the plant stops at each |
-//! | noise | [`NoNoise`] | [`GaussianNoise`]: N(0, sigma) on compression and height (seeded) |
-//! | quantization | [`NoQuantization`] | [`Quantization`]: round to a multiple of q |
-//! | latency | [`NoLatency`]: a sample is seen at once | [`Latency`]: seen `latency_s` after it was taken |
-//!
-//! The foot switch is exact (no noise, no quantization) but is delayed with its sample.
+//! The foot switch is exact (no noise, no quantization) but is delayed with its sample;
+//! compression and height share the noise's seed and the quantization step.
 //! A control frame carries the newest delivered sample; before the first delivery (the
 //! first `latency_s` of a run) it carries the first sample taken.
 
+pub use crate::effects::sensor::{
+    AtControlSteps, Clock, Delay, Exact, Latency, Measure, Measured, NoLatency, Periodic,
+};
+use crate::effects::sensor::{Sample, Sampled};
 use dexter_core::hop_control::HopFrame;
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
-use std::collections::VecDeque;
 
 /// What the sensor measures, true values.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -31,7 +29,7 @@ pub struct Truth {
 
 /// One measured sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Measured {
+pub struct HopSample {
     /// Sequence number.
     pub seq: u32,
     /// Compression, m.
@@ -42,241 +40,33 @@ pub struct Measured {
     pub height_m: f64,
 }
 
-/// When samples are taken.
-pub trait Clock {
-    /// Time of the next sample between control steps, s (infinite: none, samples are taken
-    /// at control steps).
-    fn next_sample_time_s(&self) -> f64;
-    /// True if a sample is taken at every control step.
-    fn at_control_steps(&self) -> bool;
-    /// Mark the next sample taken; its sequence number.
-    fn advance(&mut self) -> u32;
+/// Noise (standard deviations on compression and height, m; 0 = none) and quantization
+/// (step, m; 0 = none) of the hopper's channels, from `seed`.
+pub fn measured(
+    compression_sigma_m: f64,
+    height_sigma_m: f64,
+    step_m: f64,
+    seed: u64,
+) -> Measured<3> {
+    Measured::new(
+        [compression_sigma_m, 0.0, height_sigma_m],
+        [step_m, 0.0, step_m],
+        seed,
+    )
 }
 
-/// One sample at every control step.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct AtControlSteps {
-    next: u32,
-}
-
-impl Clock for AtControlSteps {
-    #[inline(always)]
-    fn next_sample_time_s(&self) -> f64 {
-        f64::INFINITY
-    }
-    #[inline(always)]
-    fn at_control_steps(&self) -> bool {
-        true
-    }
-    #[inline(always)]
-    fn advance(&mut self) -> u32 {
-        let s = self.next;
-        self.next = self.next.wrapping_add(1);
-        s
-    }
-}
-
-/// Samples every `1/rate` s, at their own times.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Periodic {
-    period_s: f64,
-    next_index: u64,
-}
-
-impl Periodic {
-    /// Samples at `rate_hz` (> 0), the first at t = 0.
-    pub fn new(rate_hz: f64) -> Self {
-        Self {
-            period_s: 1.0 / rate_hz,
-            next_index: 0,
-        }
-    }
-}
-
-impl Clock for Periodic {
-    fn next_sample_time_s(&self) -> f64 {
-        self.next_index as f64 * self.period_s
-    }
-    fn at_control_steps(&self) -> bool {
-        false
-    }
-    fn advance(&mut self) -> u32 {
-        let s = self.next_index as u32;
-        self.next_index += 1;
-        s
-    }
-}
-
-/// Measurement noise.
-pub trait Noise {
-    /// (compression, height) with noise added.
-    fn perturb(&mut self, compression_m: f64, height_m: f64) -> (f64, f64);
-}
-
-/// No noise.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct NoNoise;
-
-impl Noise for NoNoise {
-    #[inline(always)]
-    fn perturb(&mut self, compression_m: f64, height_m: f64) -> (f64, f64) {
-        (compression_m, height_m)
-    }
-}
-
-/// Gaussian noise, reproducible from a seed.
+/// The sensor, assembled from its effects.
 #[derive(Clone, Debug)]
-pub struct GaussianNoise {
-    compression: Option<Normal<f64>>,
-    height: Option<Normal<f64>>,
-    rng: rand::rngs::StdRng,
-}
-
-impl GaussianNoise {
-    /// Standard deviations (m, >= 0, finite; anything else counts as 0) on the compression
-    /// and the height.
-    pub fn new(compression_sigma_m: f64, height_sigma_m: f64, seed: u64) -> Self {
-        let normal = |s: f64| (s > 0.0).then(|| Normal::new(0.0, s).ok()).flatten();
-        Self {
-            compression: normal(compression_sigma_m),
-            height: normal(height_sigma_m),
-            rng: rand::rngs::StdRng::seed_from_u64(seed),
-        }
-    }
-}
-
-impl Noise for GaussianNoise {
-    fn perturb(&mut self, compression_m: f64, height_m: f64) -> (f64, f64) {
-        let mut draw = |n: &Option<Normal<f64>>| n.map_or(0.0, |n| n.sample(&mut self.rng));
-        (
-            compression_m + draw(&self.compression),
-            height_m + draw(&self.height),
-        )
-    }
-}
-
-/// Quantization of compression and height.
-pub trait Quantizer {
-    /// The quantized value.
-    fn quantize(&self, value_m: f64) -> f64;
-}
-
-/// No quantization.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct NoQuantization;
-
-impl Quantizer for NoQuantization {
-    #[inline(always)]
-    fn quantize(&self, value_m: f64) -> f64 {
-        value_m
-    }
-}
-
-/// Rounding to the nearest multiple of `step_m`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Quantization {
-    /// q, m (> 0).
-    pub step_m: f64,
-}
-
-impl Quantizer for Quantization {
-    fn quantize(&self, value_m: f64) -> f64 {
-        (value_m / self.step_m).round() * self.step_m
-    }
-}
-
-/// When a sample becomes visible to the controller.
-pub trait Delay {
-    /// A sample taken at `t_s`.
-    fn push(&mut self, t_s: f64, sample: Measured);
-    /// The newest sample visible at `t_s`.
-    fn latest(&mut self, t_s: f64) -> Option<Measured>;
-}
-
-/// A sample is visible at once.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct NoLatency {
-    last: Option<Measured>,
-}
-
-impl Delay for NoLatency {
-    #[inline(always)]
-    fn push(&mut self, _t_s: f64, sample: Measured) {
-        self.last = Some(sample);
-    }
-    #[inline(always)]
-    fn latest(&mut self, _t_s: f64) -> Option<Measured> {
-        self.last
-    }
-}
-
-/// A sample is visible `latency_s` after it was taken.
-#[derive(Clone, Debug)]
-pub struct Latency {
-    latency_s: f64,
-    pending: VecDeque<(f64, Measured)>,
-    last: Option<Measured>,
-    capacity: usize,
-}
-
-impl Latency {
-    /// A delay of `latency_s` (s, >= 0) for samples every `sample_period_s` (s, > 0): at
-    /// most latency / period + 2 samples are in flight.
-    pub fn new(latency_s: f64, sample_period_s: f64) -> Self {
-        let capacity = (latency_s / sample_period_s).ceil() as usize + 2;
-        Self {
-            latency_s,
-            pending: VecDeque::with_capacity(capacity),
-            last: None,
-            capacity,
-        }
-    }
-}
-
-/// Slack for the rounding of sample and control times, s.
-const TIME_SLACK_S: f64 = 1e-9;
-
-impl Delay for Latency {
-    fn push(&mut self, t_s: f64, sample: Measured) {
-        if self.pending.len() >= self.capacity {
-            // cannot happen for the configured rate; keeps memory bounded regardless
-            if let Some((_, s)) = self.pending.pop_front() {
-                self.last = Some(s);
-            }
-        }
-        self.pending.push_back((t_s + self.latency_s, sample));
-    }
-
-    fn latest(&mut self, t_s: f64) -> Option<Measured> {
-        while let Some(&(due, s)) = self.pending.front() {
-            if due > t_s + TIME_SLACK_S {
-                break;
-            }
-            self.last = Some(s);
-            self.pending.pop_front();
-        }
-        self.last.or_else(|| self.pending.front().map(|&(_, s)| s))
-    }
-}
-
-/// The sensor, assembled from its four effects.
-#[derive(Clone, Debug)]
-pub struct HopSensor<C, N, Q, D> {
-    clock: C,
-    noise: N,
-    quantizer: Q,
-    delay: D,
+pub struct HopSensor<C, M, D> {
+    sensor: Sampled<3, C, M, D>,
     body_height: bool,
 }
 
-impl<C: Clock, N: Noise, Q: Quantizer, D: Delay> HopSensor<C, N, Q, D> {
+impl<C: Clock, M: Measure<3>, D: Delay<3>> HopSensor<C, M, D> {
     /// A sensor; `body_height`: whether frames carry the body height.
-    pub fn new(clock: C, noise: N, quantizer: Q, delay: D, body_height: bool) -> Self {
+    pub fn new(clock: C, measure: M, delay: D, body_height: bool) -> Self {
         Self {
-            clock,
-            noise,
-            quantizer,
-            delay,
+            sensor: Sampled::with(clock, measure, delay),
             body_height,
         }
     }
@@ -284,31 +74,24 @@ impl<C: Clock, N: Noise, Q: Quantizer, D: Delay> HopSensor<C, N, Q, D> {
     /// Time of the next sample between control steps, s (infinite: none).
     #[inline]
     pub fn next_sample_time_s(&self) -> f64 {
-        self.clock.next_sample_time_s()
+        self.sensor.next_sample_time_s()
     }
 
     /// Take a sample of `truth` at `t_s`.
     #[inline]
     pub fn sample(&mut self, t_s: f64, truth: Truth) {
-        let seq = self.clock.advance();
-        let (c, h) = self.noise.perturb(truth.compression_m, truth.height_m);
-        let m = Measured {
-            seq,
-            compression_m: self.quantizer.quantize(c),
-            contact: truth.contact,
-            height_m: self.quantizer.quantize(h),
-        };
-        self.delay.push(t_s, m);
+        self.sensor.take(t_s, channels(truth));
     }
 
     /// The frame at a control step at `t_s` (taking the step's sample first when the sensor
     /// samples at control steps), and the measured sample it carries.
     #[inline]
-    pub fn frame(&mut self, t_s: f64, truth: Truth) -> (HopFrame, Option<Measured>) {
-        if self.clock.at_control_steps() {
-            self.sample(t_s, truth);
-        }
-        match self.delay.latest(t_s) {
+    pub fn frame(&mut self, t_s: f64, truth: Truth) -> (HopFrame, Option<HopSample>) {
+        match self
+            .sensor
+            .deliver(t_s, channels(truth))
+            .map(measured_sample)
+        {
             Some(m) => (
                 HopFrame {
                     seq: m.seq,
@@ -329,6 +112,28 @@ impl<C: Clock, N: Noise, Q: Quantizer, D: Delay> HopSensor<C, N, Q, D> {
     }
 }
 
+/// The sensor's channels of `truth`.
+#[inline]
+fn channels(truth: Truth) -> [f64; 3] {
+    [
+        truth.compression_m,
+        if truth.contact { 1.0 } else { 0.0 },
+        truth.height_m,
+    ]
+}
+
+/// A sample of the three channels as the hopper reads it.
+#[inline]
+fn measured_sample(s: Sample<3>) -> HopSample {
+    let [compression_m, contact, height_m] = s.values;
+    HopSample {
+        seq: s.seq,
+        compression_m,
+        contact: contact != 0.0,
+        height_m,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -343,13 +148,7 @@ mod tests {
 
     #[test]
     fn off_sensor_passes_the_truth_with_the_step_as_sequence() {
-        let mut s = HopSensor::new(
-            AtControlSteps::default(),
-            NoNoise,
-            NoQuantization,
-            NoLatency::default(),
-            true,
-        );
+        let mut s = HopSensor::new(AtControlSteps::default(), Exact, NoLatency::default(), true);
         for k in 0..3 {
             let (f, _) = s.frame(k as f64 * 1e-3, truth(0.01 * k as f64));
             assert_eq!(f.seq, k);
@@ -357,8 +156,7 @@ mod tests {
             assert_eq!(f.contact, k > 0);
             assert_eq!(f.body_height(), Some((0.5 - 0.01 * k as f64) as f32));
         }
-        assert_eq!(std::mem::size_of::<NoNoise>(), 0);
-        assert_eq!(std::mem::size_of::<NoQuantization>(), 0);
+        assert_eq!(std::mem::size_of::<Exact>(), 0);
     }
 
     #[test]
@@ -366,9 +164,8 @@ mod tests {
         // 2.5 ms latency at 1 kHz: the frame at 10 ms carries the sample of 7 ms (due 9.5 ms)
         let mut s = HopSensor::new(
             AtControlSteps::default(),
-            NoNoise,
-            Quantization { step_m: 1e-3 },
-            Latency::new(2.5e-3, 1e-3),
+            measured(0.0, 0.0, 1e-3, 1),
+            Latency::new(2.5e-3, 1e3),
             false,
         );
         let mut last = None;
@@ -381,12 +178,13 @@ mod tests {
             (f64::from(f.leg_compression_m) - 0.071).abs() < 1e-7,
             "{f:?}"
         );
+        assert!(f.contact, "the foot switch is neither noisy nor quantized");
         assert_eq!(f.body_height(), None);
-        // noise: sample spread matches sigma
-        let mut n = GaussianNoise::new(2e-3, 0.0, 3);
-        let xs: Vec<f64> = (0..20_000).map(|_| n.perturb(0.0, 1.0).0).collect();
-        let sd = (xs.iter().map(|x| x * x).sum::<f64>() / xs.len() as f64).sqrt();
+        // noise: sample spread matches sigma, and the height channel is left alone
+        let mut n = measured(2e-3, 0.0, 0.0, 3);
+        let xs: Vec<[f64; 3]> = (0..20_000).map(|_| n.measure([0.0, 1.0, 1.0])).collect();
+        let sd = (xs.iter().map(|x| x[0] * x[0]).sum::<f64>() / xs.len() as f64).sqrt();
         assert!((sd - 2e-3).abs() < 1e-4, "{sd}");
-        assert_eq!(n.perturb(0.0, 1.0).1, 1.0);
+        assert!(xs.iter().all(|x| x[1] == 1.0 && x[2] == 1.0));
     }
 }
