@@ -1,7 +1,7 @@
 //! The controllers this firmware image hosts, as one enum the server dispatches on.
 //!
 //! Every hosted controller is a [`FixedRate`] controller of the core with a [`Wire`] impl
-//! (one line in `dexter_core::protocol`'s kind list). Hosting one more is one line in the
+//! (its variants in `dexter_core::protocol::kinds`). Hosting one more is one line in the
 //! `hosted!` list at the end of this file; the server, the links and the host's HIL driver
 //! do not change. A kind that is not listed here is refused at `Configure`
 //! (`Rejection::NotHosted`), so an image can leave out the controllers a board does not

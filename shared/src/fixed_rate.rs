@@ -2,13 +2,16 @@
 //! [`FixedRate::step`] per control period from a sensor frame to a command, and a safe
 //! state with a fault code.
 //!
-//! Every controller the firmware hosts (the line juggler's [`Controller`], and the tilt
-//! table, the hopper's thrust and the arm's trajectory tracker as they join) implements
+//! Every controller the firmware hosts (the line juggler's [`Controller`], the link check,
+//! the tilt table, the hopper's thrust and the arm's trajectory tracker) implements
 //! [`FixedRate`], and its command type implements [`Reply`]. The simulator's SIL loop, the
 //! host's HIL driver and the firmware's server are written once against these two traits
 //! and [`Wire`] (how a controller's types travel on the link): a new controller needs its
-//! own parameter, frame and command types and one line in the protocol's kind list, not a
+//! own parameter, frame and command types and its variants in the protocol's kinds, not a
 //! new loop (see [`crate::protocol`], "Adding a controller kind").
+//!
+//! What every command and the telemetry say whatever the kind ([`Mode`], [`Fault`],
+//! [`Telemetry`]) is defined here too, so a controller imports nothing of the protocol.
 //!
 //! Contract of an implementation (tested per controller):
 //! - `step` does bounded work (fixed iteration caps, no recursion), allocates nothing and

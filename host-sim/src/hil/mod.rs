@@ -68,8 +68,9 @@
 //! ## Adding a controller kind
 //! 1. Implement `dexter_core::fixed_rate::FixedRate` for it (with its
 //!    `STEP_INSTRUCTION_BUDGET` and the argument for it).
-//! 2. One line `Name => path::Controller` at the end of the `controller_kinds!` list in
-//!    `shared/src/protocol.rs`: its `Config`/`Frame`/`Command` variants and its `Wire` impl.
+//! 2. Its variants appended to `Kind`, `Config`, `Frame` and `Command` and its `Wire` impl
+//!    (`wire!`) in `shared/src/protocol/kinds.rs` (`dexter_core::protocol`, "Adding a
+//!    controller kind").
 //! 3. One line `Name(path::Controller)` in the `hosted!` list in `firmware/src/hosted.rs`.
 //!
 //! Then `LockStep::<path::Controller>::start(params, opts)` runs it in QEMU, and a system
