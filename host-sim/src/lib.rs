@@ -22,16 +22,14 @@
 //! | [`engine`] | closed-form flight, robust contact roots, impacts, Zeno, drag integrators |
 //! | [`effects`] | one module per switchable effect: actuator, sensor, jitter |
 //! | [`model`] | the physics of each system (line, planar, hopper) |
-//!
-//! The line juggler's run API keeps its earlier paths: [`run`], [`report`] and [`trace`]
-//! are [`systems::line`]'s modules.
 #![warn(missing_docs)]
 
+pub mod cli;
 pub mod controller;
 pub mod effects;
 pub mod engine;
-pub mod external;
 pub mod filmstrip;
+pub mod grid;
 pub mod hil;
 pub mod model;
 pub mod output;
@@ -40,8 +38,6 @@ pub mod plot;
 pub mod progress;
 pub mod scene;
 pub mod stream;
-pub mod sweep;
+pub mod system;
 pub mod systems;
 pub mod verbs;
-
-pub use systems::line::{run, summary as report, trace};

@@ -1,13 +1,14 @@
 //! `dexter`: run scenes, sweep parameters, analyze, write traces and plots.
 //!
 //! The scene file is read once; the system that claims its top-level tables
-//! (`dexter_sim::systems::claim`) runs the verb. Nothing here knows a system by name.
+//! (`dexter_sim::cli::registry::claim`) runs the verb. Nothing here knows a system by name.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use dexter_sim::external::{HilLink, HilRequest};
+use dexter_sim::cli::registry::{claim, Entry};
+use dexter_sim::hil::LinkKind;
 use dexter_sim::scene::SceneFile;
-use dexter_sim::systems::{claim, Dispatch};
-use dexter_sim::verbs::{AnalyzeRequest, Failure, RunRequest, SweepRequest};
+use dexter_sim::system::{Failure, HilRequest};
+use dexter_sim::verbs::{AnalyzeRequest, RunRequest, SweepRequest};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -157,8 +158,8 @@ impl RunArgs {
         let hil = self.hil.then(|| HilRequest {
             firmware: self.firmware,
             link: self.link.map(|l| match l {
-                Link::Semihosting => HilLink::Semihosting,
-                Link::Uart => HilLink::Uart,
+                Link::Semihosting => LinkKind::Semihosting,
+                Link::Uart => LinkKind::Uart,
             }),
             budget: self.budget,
             corrupt_rate: self.corrupt_rate,
@@ -179,7 +180,7 @@ impl RunArgs {
 /// Read the scene once and hand it to the system that claims it.
 fn with_scene(
     path: &Path,
-    verb: impl FnOnce(&dyn Dispatch, &SceneFile) -> Result<(), Failure>,
+    verb: impl FnOnce(&Entry, &SceneFile) -> Result<(), Failure>,
 ) -> Result<(), Failure> {
     let file = SceneFile::read(path)?;
     verb(claim(&file.table), &file)
@@ -199,14 +200,14 @@ fn main() -> ExitCode {
                 csv: a.csv,
                 plot: a.plot,
             };
-            s.sweep(f, &req)
+            (s.sweep)(f, &req)
         }),
         Some(Command::Analyze(a)) => with_scene(&a.scene.clone(), |s, f| {
             let req = AnalyzeRequest {
                 sets: a.set,
                 json: a.json,
             };
-            s.analyze(f, &req)
+            (s.analyze)(f, &req)
         }),
     };
     match result {
@@ -220,5 +221,5 @@ fn main() -> ExitCode {
 
 fn run(args: RunArgs) -> Result<(), Failure> {
     let path = args.scene.clone();
-    with_scene(&path, |s, f| s.run(f, &args.request()))
+    with_scene(&path, |s, f| (s.run)(f, &args.request()))
 }

@@ -5,7 +5,7 @@ use super::FeederConfig;
 use crate::model::feeder::execute::{Summary, FEED_TOL_M};
 use crate::model::feeder::primitives::Primitive;
 use crate::output::{json_text, JsonStyle};
-use crate::systems::Outcome;
+use crate::system::Outcome;
 use serde::Serialize;
 use std::fmt::Write as _;
 

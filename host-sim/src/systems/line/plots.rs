@@ -7,8 +7,8 @@ use super::trace::ImpactRow;
 use super::{LineOutcome, LineSystem};
 use crate::plot;
 use crate::stream::Decimator;
-use crate::systems::Plots;
-use crate::verbs::Failure;
+use crate::system::Failure;
+use crate::system::Plots;
 use std::path::{Path, PathBuf};
 
 /// Flights of a run without a controller drawn in its phase portrait.

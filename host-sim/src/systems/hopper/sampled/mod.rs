@@ -26,8 +26,7 @@ use crate::controller::{Counted, Sil, StepController};
 use crate::model::hopper::sampled::{run_sampled_with, SampledError, MAX_CYCLES};
 use crate::progress::Progress;
 use crate::scene::{SceneError, SceneFile};
-use crate::systems::System;
-use crate::verbs::{Failure, Setup};
+use crate::system::{Failure, RunLength, Setup, System};
 use dexter_core::hop_control::{HopController, HopParams};
 use std::time::Instant;
 
@@ -37,9 +36,10 @@ pub struct SampledHopperSystem;
 
 impl System for SampledHopperSystem {
     const NAME: &'static str = "sampled hopper";
-    const TABLE: &'static str = "hopper";
-    const IMPACTS_KEY: &'static str = "hopper.cycles";
-    const MAX_IMPACTS: u64 = MAX_CYCLES as u64;
+    const LENGTH: RunLength = RunLength::Events {
+        key: "hopper.cycles",
+        max: MAX_CYCLES as u64,
+    };
     type Config = SampledHopperConfig;
     type Controller = HopController;
     type Row = SampledRow;

@@ -12,7 +12,7 @@ use crate::model::hopper::sampled::{
 };
 use crate::model::hopper::ThrustLaw;
 use crate::output::{json_text, JsonStyle};
-use crate::systems::Outcome;
+use crate::system::Outcome;
 use serde::Serialize;
 
 /// What a sampled run produced.

@@ -2,28 +2,18 @@
 //! [`StepController`] a plant steps in SIL.
 //!
 //! **This is the one place the CLI reaches the HIL driver** ([`crate::hil`]). A system
-//! names its controller kind ([`crate::systems::System::Controller`]); `--hil` starts that
+//! names its controller kind ([`crate::system::System::Controller`]); `--hil` starts that
 //! kind on the target through [`OnTarget::start`] (for every kind the protocol carries,
 //! [`Wire`]: `crate::hil::LockStep::<C>::start`), the plant steps it like the core linked
 //! in, and [`Target::finish`] stops it and returns the [`HilReport`]. A new controller kind
 //! the firmware hosts needs nothing here.
 
+use super::{Failure, NoController};
 use crate::controller::{ControllerError, HilReport, StepController};
-use crate::systems::NoController;
-use crate::verbs::Failure;
+use crate::hil::LinkKind;
 use dexter_core::fixed_rate::FixedRate;
 use dexter_core::protocol::Wire;
 use std::path::PathBuf;
-
-/// The plant link to the firmware.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum HilLink {
-    /// Semihosting file I/O (fast; the default).
-    #[default]
-    Semihosting,
-    /// The board's UART on a TCP socket (the real driver path; slow in QEMU).
-    Uart,
-}
 
 /// `--hil` and its options as given on the command line.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -31,7 +21,7 @@ pub struct HilRequest {
     /// `--firmware PATH` (relative to the current directory), else the release build.
     pub firmware: Option<PathBuf>,
     /// `--link`.
-    pub link: Option<HilLink>,
+    pub link: Option<LinkKind>,
     /// `--budget N` instructions per step (0 = none).
     pub budget: Option<u32>,
     /// `--corrupt-rate F`, in [0, 1].
@@ -83,10 +73,7 @@ fn hil_options(req: &HilRequest) -> Result<crate::hil::HilOptions, Failure> {
             .map_err(|e| Failure::usage(format!("--firmware {}: {e}", p.display())))?;
     }
     if let Some(l) = req.link {
-        opts.link = match l {
-            HilLink::Semihosting => crate::hil::LinkKind::Semihosting,
-            HilLink::Uart => crate::hil::LinkKind::Uart,
-        };
+        opts.link = l;
     }
     if let Some(b) = req.budget {
         opts.instruction_budget = (b > 0).then_some(b).into();

@@ -1,0 +1,3 @@
+//! The command line: the registry the CLI dispatches on ([`registry`]).
+
+pub mod registry;
