@@ -15,19 +15,39 @@ use dexter_core::fixed_rate::FixedRate;
 use dexter_core::protocol::Wire;
 use std::path::PathBuf;
 
-/// `--hil` and its options as given on the command line.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// The options of `--hil` as given on the command line (the doc comment of each field is
+/// its `--help` line; a relative `--firmware` is taken from the current directory).
+#[derive(clap::Args, Clone, Debug, Default, PartialEq)]
 pub struct HilRequest {
-    /// `--firmware PATH` (relative to the current directory), else the release build.
+    /// Firmware ELF for --hil (default: the release build in target/).
+    #[arg(long, value_name = "PATH", requires = "hil")]
     pub firmware: Option<PathBuf>,
-    /// `--link`.
+    /// Plant link for --hil.
+    #[arg(long, value_enum, requires = "hil")]
     pub link: Option<LinkKind>,
-    /// `--budget N` instructions per step (0 = none).
+    /// Instruction budget per control step for --hil (0 = no budget).
+    #[arg(long, value_name = "N", requires = "hil")]
     pub budget: Option<u32>,
-    /// `--corrupt-rate F`, in [0, 1].
+    /// Fraction of host-to-device bytes corrupted for --hil, in [0, 1].
+    #[arg(long, value_name = "F", requires = "hil")]
     pub corrupt_rate: Option<f64>,
-    /// `--port PATH`: a real board on this serial port instead of QEMU.
+    /// HIL against a real board on this serial port (e.g. /dev/ttyACM0) instead of QEMU.
+    #[arg(long, value_name = "PATH", requires = "hil", conflicts_with_all = ["firmware", "link"])]
     pub port: Option<PathBuf>,
+}
+
+/// `--link semihosting|uart`: the HIL driver's own [`LinkKind`], as clap parses it.
+impl clap::ValueEnum for LinkKind {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[LinkKind::Semihosting, LinkKind::Uart]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(match self {
+            LinkKind::Semihosting => "semihosting",
+            LinkKind::Uart => "uart",
+        }))
+    }
 }
 
 /// A controller of kind `C` running on a target.

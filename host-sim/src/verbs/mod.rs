@@ -14,50 +14,84 @@ pub use run::run;
 pub use sweep::{sweep, MAX_KEEP};
 
 use crate::system::{Failure, HilRequest};
+use clap::Args;
 use std::path::PathBuf;
 
-/// `dexter run SCENE ...` as parsed from the command line.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// `dexter run SCENE ...` as parsed from the command line (the doc comment of each field
+/// is its `--help` line).
+#[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct RunRequest {
-    /// `--set key.path=value`, unparsed, in order.
-    pub sets: Vec<String>,
-    /// `--impacts N`: the run's length in the system's events (impacts, hops, bats).
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Events to simulate: impacts, hops or bats (line scenes: overrides stop.impacts; the
+    /// duration limit becomes N x 60 s, a cap for runs whose ball stops bouncing).
+    #[arg(long, conflicts_with = "duration")]
     pub impacts: Option<u64>,
-    /// `--duration S`: simulated seconds (systems with a time limit).
+    /// Simulated seconds (line scenes: overrides stop.duration_s; the impact limit is lifted).
+    #[arg(long)]
     pub duration: Option<f64>,
-    /// `--trace FILE.csv`: one row per event.
+    /// Override a scene key: key.path=value (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Write the trace as CSV, one row per event (a missing directory is created).
+    #[arg(long, value_name = "FILE.csv")]
     pub trace: Option<PathBuf>,
-    /// `--plot DIR`: SVG + PNG plots.
+    /// Write plots (SVG + PNG) into this directory.
+    #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
-    /// `--json`: one JSON object instead of the human summary.
+    /// Print the summary as one JSON object.
+    #[arg(long)]
     pub json: bool,
-    /// `--hil ...`: the controller runs as firmware in QEMU.
-    pub hil: Option<HilRequest>,
+    /// Hardware in the loop: the firmware in QEMU is the controller.
+    #[arg(long)]
+    pub hil: bool,
+    /// The `--hil` options (each requires `--hil`).
+    #[command(flatten)]
+    pub target: HilRequest,
+}
+
+impl RunRequest {
+    /// The `--hil` options, if `--hil` was given.
+    pub fn on_target(&self) -> Option<&HilRequest> {
+        self.hil.then_some(&self.target)
+    }
 }
 
 /// `dexter sweep SCENE ...` as parsed from the command line.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct SweepRequest {
-    /// `--set key.path=value`, unparsed, in order.
-    pub sets: Vec<String>,
-    /// `--range key.path=FROM:TO:N`, unparsed.
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// The swept key and its values: key.path=FROM:TO:N.
+    #[arg(long, value_name = "KEY=FROM:TO:N")]
     pub range: String,
-    /// `--range2 key.path=FROM:TO:M`, unparsed: a second axis (systems that map two).
+    /// A second swept key for a two-dimensional map (planar scenes): key.path=FROM:TO:N.
+    #[arg(long, value_name = "KEY=FROM:TO:N")]
     pub range2: Option<String>,
-    /// `--keep K`: late values kept per point (systems that keep values).
+    /// Override a scene key: key.path=value (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Late values kept from the end of each run.
+    #[arg(long, default_value_t = 64)]
     pub keep: usize,
-    /// `--csv FILE`: the points as CSV (else on stdout).
+    /// Write the points as CSV (a missing directory is created; else on stdout).
+    #[arg(long, value_name = "FILE.csv")]
     pub csv: Option<PathBuf>,
-    /// `--plot DIR`: the sweep's plot.
+    /// Write the sweep's plot into this directory.
+    #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
 }
 
 /// `dexter analyze SCENE ...` as parsed from the command line.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct AnalyzeRequest {
-    /// `--set key.path=value`, unparsed, in order.
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Override a scene key: key.path=value (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
-    /// `--json`: one JSON object instead of the human report.
+    /// Print one JSON object instead of the human report.
+    #[arg(long)]
     pub json: bool,
 }
 

@@ -35,7 +35,7 @@ pub fn run<S: System>(file: &SceneFile, req: &RunRequest) -> Result<(), Failure>
         true => &mut record,
         false => &mut ignore,
     };
-    let outcome = match &req.hil {
+    let outcome = match req.on_target() {
         None => S::run(&cfg, None, &setup, rows)?,
         Some(h) => run_on_target::<S>(&cfg, h, &setup, rows)?,
     };

@@ -140,7 +140,7 @@ impl SweepReport<LineSystem> for LineSweepReport {
 
     fn plot(&self, dir: &Path) -> Result<Vec<PathBuf>, Failure> {
         let label = plot::key_label(&self.key);
-        Ok(plot::bifurcation(
+        Ok(super::plots::bifurcation(
             self.points.values(),
             &label,
             dir,
