@@ -7,6 +7,7 @@
 //! `docs/feeder.md`.
 
 pub mod plots;
+pub mod scene;
 pub mod summary;
 pub mod sweep;
 pub mod trace;
@@ -16,10 +17,10 @@ use self::trace::FeederRow;
 use crate::controller::StepController;
 use crate::model::feeder::execute::{execute_observed, summarize};
 use crate::model::feeder::planner::plan;
-use crate::model::feeder::scene::{Built, FeederFile, FeederScene};
 use crate::model::feeder::FeederError;
 use crate::scene::{deserialize, SceneError, SceneFile};
 use crate::system::{Failure, NoController, RunLength, Setup, System};
+use scene::{Built, FeederFile, FeederScene};
 use std::time::Instant;
 
 /// The feeder system.

@@ -72,8 +72,8 @@ pub struct RunSummary {
     pub table: &'static str,
     /// The run ended because |theta| reached the tip angle.
     pub tipped_over: bool,
-    /// (late mean eta - eta*)/eta*, as `late_mean_energy_rel_error` (issue 11's name, the
-    /// same for both tables).
+    /// (late mean eta - eta*)/eta*, as `late_mean_energy_rel_error` (the same key for both
+    /// tables, `docs/planar.md`).
     pub late_energy_error: f64,
     /// max |theta| at impacts over the late window, rad, as `late_max_abs_theta_rad`.
     pub late_theta_max_rad: f64,

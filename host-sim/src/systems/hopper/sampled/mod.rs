@@ -1,4 +1,4 @@
-//! The hopper on the MCU (issue 12): a `[hopper]` scene with a `[hopper.control]` table
+//! The hopper on the MCU: a `[hopper]` scene with a `[hopper.control]` table
 //! closes its loop through the core's fixed-rate thrust controller
 //! ([`dexter_core::hop_control::HopController`]): in SIL the core linked in, with `--hil`
 //! the firmware in QEMU, lock-step and bit for bit. The plant is the valve-driven hopper of
@@ -8,7 +8,7 @@
 //! | module | what it holds |
 //! | --- | --- |
 //! | [`scene`] | `[hopper.control]`, `[hopper.sensor]` and their checks |
-//! | [`summary`] | the JSON keys of issue 12 and the text summary |
+//! | [`summary`] | the JSON keys (`docs/hopper.md`) and the text summary |
 //! | [`trace`] | one CSV row per hop |
 //! | [`plots`] | the timeline of the last hops: leg, phases, valve |
 //!
