@@ -8,9 +8,9 @@ use dexter_sim::engine::zeno::ZenoPolicy;
 use dexter_sim::engine::Ballistic;
 use dexter_sim::model::line::{Advance, LinePlant};
 use dexter_sim::model::surface::{Actuated, Surface};
-use dexter_sim::report::Summary;
-use dexter_sim::run::{run_streaming, RunOptions};
-use dexter_sim::trace::ImpactRow;
+use dexter_sim::systems::line::run::{run_streaming, RunOptions};
+use dexter_sim::systems::line::summary::Summary;
+use dexter_sim::systems::line::trace::ImpactRow;
 use dexter_tests::{load_scene, rel, run_rows};
 
 const G: f64 = 9.81;

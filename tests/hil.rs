@@ -64,9 +64,9 @@ fn options(link: LinkKind) -> HilOptions {
 /// instruction budget of 300.
 #[test]
 fn line_juggler_scene_in_hil_converges_and_equals_sil_bit_for_bit() {
-    use dexter_sim::report::converged_after;
-    use dexter_sim::run::{run_scene, RunOptions};
-    use dexter_sim::scene::Scene;
+    use dexter_sim::systems::line::run::{run_scene, RunOptions};
+    use dexter_sim::systems::line::scene::Scene;
+    use dexter_sim::systems::line::summary::converged_after;
 
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/line-juggler.toml");
     let overrides = [("stop.impacts".to_string(), toml::Value::Integer(120))];

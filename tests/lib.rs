@@ -1,7 +1,8 @@
 //! Shared helpers for the workspace-level tests: loading the shipped scenes and running them.
 
-use dexter_sim::run::{run_scene, RunOptions, RunOutcome};
-use dexter_sim::scene::{parse_set, Scene};
+use dexter_sim::scene::parse_set;
+use dexter_sim::systems::line::run::{run_scene, RunOptions, RunOutcome};
+use dexter_sim::systems::line::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 

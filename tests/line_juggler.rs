@@ -1,7 +1,7 @@
 //! Paper reproductions on the line juggler (Rizzi & Koditschek sec. 2) and the passive
 //! bounce, against closed forms computed here, independently of the simulator.
 
-use dexter_sim::report::Summary;
+use dexter_sim::systems::line::summary::Summary;
 use dexter_tests::{load_scene, rel, run_rows};
 
 /// Passive bounce from apex h0 with restitution e: the n-th impact (0-based) happens at
@@ -151,8 +151,8 @@ fn realistic_line_juggler_converges_within_one_percent() {
 
 #[test]
 fn sweep_over_kappa1_period_doubles_where_beta_v2_passes_one() {
+    use dexter_sim::grid::Range;
     use dexter_sim::scene::SceneFile;
-    use dexter_sim::sweep::Range;
     use dexter_sim::systems::line::sweep::sweep;
     let sets = [dexter_sim::scene::parse_set("stop.impacts=600").unwrap()];
     let table = SceneFile::read(&dexter_tests::scenes_dir().join("line-juggler-chaotic.toml"))

@@ -11,8 +11,9 @@
 //! The error of each method is printed (ACCURACY lines) before it is timed.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use dexter_sim::run::{run_scene, RunOptions};
-use dexter_sim::scene::{parse_set, Scene};
+use dexter_sim::scene::parse_set;
+use dexter_sim::systems::line::run::{run_scene, RunOptions};
+use dexter_sim::systems::line::scene::Scene;
 use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Duration;

@@ -4,8 +4,9 @@
 //! that is off is a different (smaller) type, not a branch.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use dexter_sim::run::{run_scene, RunOptions};
-use dexter_sim::scene::{parse_set, Scene};
+use dexter_sim::scene::parse_set;
+use dexter_sim::systems::line::run::{run_scene, RunOptions};
+use dexter_sim::systems::line::scene::Scene;
 use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Duration;

@@ -4,34 +4,36 @@
 //! software-in-the-loop (the core linked in) and hardware-in-the-loop (the firmware in QEMU)
 //! runs, traces and plots.
 //!
+//! The modules, top layer first: each imports only those below it, and none imports a module
+//! that imports it back (`scripts/layers.py` checks both).
+//!
 //! | module | what it holds |
 //! | --- | --- |
-//! | [`systems`] | every simulated system behind one trait, and the registry the CLI dispatches on |
-//! | [`verbs`] | the CLI's `run` and `sweep`, written once for every system |
+//! | [`cli`] | the `dexter` command line (clap on the verbs' requests) and the registry of systems |
+//! | [`verbs`] | `run`, `sweep` and `analyze`, written once for every system |
+//! | [`systems`] | each system's scene layout, summary, trace rows, plots, sweep axes and analysis |
+//! | [`system`] | what a system is to the verbs: the [`system::System`] trait, its run length, failures and exit codes, `--hil` targets |
+//! | [`model`] | the physics of each system (line, planar, hopper, arm, feeder) and its parameters |
+//! | [`engine`] | closed-form flight, robust contact roots, impacts, Zeno, drag integrators |
+//! | [`effects`] | one module per switchable effect: actuator, sensor, jitter |
+//! | [`hil`] | the firmware in QEMU (or a board on a serial port), lock-stepped with the plant |
+//! | [`controller`] | [`controller::StepController`]: a plant closes its loop through SIL or HIL alike |
 //! | [`scene`] | scene files read once, TOML errors with line and column, `--set`, key paths in errors |
-//! | [`sweep`] | sweep ranges and the parallel, order-keeping sweep engine |
+//! | [`grid`] | sweep ranges and the parallel, order-keeping evaluation of their grid |
 //! | [`output`] | output files written whole or not at all; the CSV number format; JSON |
 //! | [`period`] | the period a late orbit has provably settled to |
-//! | [`plot`] | SVG + PNG plots |
+//! | [`plot`] | SVG + PNG charts |
 //! | [`filmstrip`] | a motion as a grid of panels in one world window (arm, feeder, tilt table) |
 //! | [`stream`] | constant-memory views of a run: last values, decimated plot points |
 //! | [`progress`] | progress bars (on a terminal only) |
-//! | [`controller`] | [`controller::StepController`]: a plant closes its loop through SIL or HIL alike |
-//! | [`external`] | `--hil`: the system's controller on the target (the one seam to [`hil`]) |
-//! | [`hil`] | the firmware in QEMU, lock-stepped with the plant |
-//! | [`engine`] | closed-form flight, robust contact roots, impacts, Zeno, drag integrators |
-//! | [`effects`] | one module per switchable effect: actuator, sensor, jitter |
-//! | [`model`] | the physics of each system (line, planar, hopper) |
-//!
-//! The line juggler's run API keeps its earlier paths: [`run`], [`report`] and [`trace`]
-//! are [`systems::line`]'s modules.
 #![warn(missing_docs)]
 
+pub mod cli;
 pub mod controller;
 pub mod effects;
 pub mod engine;
-pub mod external;
 pub mod filmstrip;
+pub mod grid;
 pub mod hil;
 pub mod model;
 pub mod output;
@@ -40,8 +42,6 @@ pub mod plot;
 pub mod progress;
 pub mod scene;
 pub mod stream;
-pub mod sweep;
+pub mod system;
 pub mod systems;
 pub mod verbs;
-
-pub use systems::line::{run, summary as report, trace};

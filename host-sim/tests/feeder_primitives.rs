@@ -12,8 +12,8 @@ use dexter_sim::model::feeder::planner::detail::{arrive, jog, turn};
 use dexter_sim::model::feeder::planner::goal::{goal_edge, has_parallel_pair};
 use dexter_sim::model::feeder::planner::{plan, Feeder, PlanOptions};
 use dexter_sim::model::feeder::primitives::{turn_landing_radius_m, Primitive};
-use dexter_sim::model::feeder::scene::FeederScene;
 use dexter_sim::model::feeder::FeederError;
+use dexter_sim::systems::feeder::scene::FeederScene;
 
 fn pts(v: &[(f64, f64)]) -> Vec<Vec2> {
     v.iter().map(|&(x, y)| Vec2::new(x, y)).collect()
@@ -36,7 +36,7 @@ const L_PART: &str =
 /// parallel long ones.
 const PARALLEL: &str = "[[0.0, 0.0], [0.04, 0.0], [0.05, 0.01], [0.01, 0.01]]";
 
-fn built(vertices: &str) -> dexter_sim::model::feeder::scene::Built {
+fn built(vertices: &str) -> dexter_sim::systems::feeder::scene::Built {
     FeederScene::from_toml_str(&scene(vertices, ""))
         .unwrap()
         .build()

@@ -10,11 +10,12 @@ use dexter_core::tilt::{
     energy_eigenvalue, impact as core_impact, impact_normal, kappa_crit, point_mass_angle_after,
     tilt_eigenvalues,
 };
-use dexter_sim::model::planar::analysis::{analyze, classify, stability_map, CellClass, Verdict};
+use dexter_sim::model::planar::analysis::{analyze, Verdict};
 use dexter_sim::model::planar::contact::{first_contact, Gap};
 use dexter_sim::model::planar::eigen::eigenvalues;
 use dexter_sim::model::planar::impact::{coulomb, FrictionMode, ImpactGeometry};
 use dexter_sim::model::planar::juggler::JugglerParams;
+use dexter_sim::model::planar::stats::{classify, stability_map, CellClass};
 use dexter_sim::model::planar::{PlanarError, PlanarParams, RunEnd};
 
 const G: f64 = 9.81;

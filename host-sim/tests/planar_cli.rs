@@ -3,7 +3,7 @@
 //! friction, a small `sweep` against the library's `classify`, plots, and named errors.
 
 use dexter_core::tilt::{kappa_crit, tilt_eigenvalues};
-use dexter_sim::model::planar::analysis::classify;
+use dexter_sim::model::planar::stats::classify;
 use dexter_sim::model::planar::PlanarParams;
 mod common;
 

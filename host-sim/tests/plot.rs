@@ -7,10 +7,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use dexter_sim::plot::{
-    apex_per_impact, bifurcation, phase_portrait, return_map, PlotError, PLOT_SIZE,
-};
-use dexter_sim::trace::ImpactRow;
+use dexter_sim::plot::{PlotError, PLOT_SIZE};
+use dexter_sim::systems::line::plots::{apex_per_impact, bifurcation, phase_portrait, return_map};
+use dexter_sim::systems::line::trace::ImpactRow;
 
 /// A fresh, unique directory under the system temp dir, removed on drop (unless
 /// `DEXTER_KEEP_PLOTS` is set). The directory itself is not created: the plot functions must.

@@ -1,11 +1,11 @@
 //! The line juggler's plant: a ball on a vertical line over a surface, advanced from event
 //! to event with only the effects it was assembled with.
 
+use super::impact::ImpactRow;
 use super::surface::Surface;
 use crate::effects::jitter::Jitter;
 use crate::engine::zeno::{remaining_time_s, ZenoPolicy};
 use crate::engine::{Flight, FlightEnd};
-use crate::trace::ImpactRow;
 use dexter_core::state::{restitution_velocity, BallState};
 
 /// Most flight segments in one [`LinePlant::advance_to`] call (a safety cap: a segment ends

@@ -6,6 +6,7 @@
 pub mod arm;
 pub mod feeder;
 pub mod hopper;
+pub mod impact;
 pub mod line;
 pub mod planar;
 pub mod surface;

@@ -3,7 +3,7 @@
 //! `--set key.path=value` overrides applied to the table (so they pass the same checks as
 //! the file), and deserialization into a system's schema with errors that name the dotted
 //! key (unknown keys, wrong types). Which system runs a scene is decided from its top-level
-//! tables ([`crate::systems::claim`]); each system validates its own ranges.
+//! tables (`crate::cli::registry::claim`); each system validates its own ranges.
 
 mod file;
 mod set;
@@ -12,10 +12,6 @@ pub use file::{deserialize, SceneFile};
 pub use set::{apply_set, parse_set, parse_sets};
 
 use std::fmt;
-
-/// The line juggler's scene schema under its historical path (the HIL tests and benches
-/// load line scenes as `dexter_sim::scene::Scene`); it lives in [`crate::systems::line`].
-pub use crate::systems::line::scene::Scene;
 
 /// Why a scene was rejected: the dotted key path and the reason.
 #[derive(Clone, Debug, PartialEq)]

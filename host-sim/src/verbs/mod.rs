@@ -1,137 +1,97 @@
 //! The CLI's verbs, written once for every system: `run` ([`run()`]: `--impacts`,
-//! `--duration`, `--set`, `--json`, `--trace`, `--plot`, `--hil`) and `sweep` ([`sweep()`]:
-//! `--range`, `--range2`, `--keep`, `--csv`, `--plot`); `analyze` is a system's own. A
-//! system opts into each verb and option (see [`crate::systems::System`]); one it does not
-//! support is refused with exit status 2 and a message naming the option.
-//!
-//! Exit statuses: 2 for a bad scene or bad arguments ([`Failure::scene`],
-//! [`Failure::usage`]), 1 for a run that failed (controller, I/O; [`Failure::run`]).
+//! `--duration`, `--set`, `--json`, `--trace`, `--plot`, `--hil`), `sweep` ([`sweep()`]:
+//! `--range`, `--range2`, `--keep`, `--csv`, `--plot`) and `analyze` ([`analyze()`]:
+//! `--set`, `--json`; the analysis is the system's own). A system opts into each verb and
+//! option (see [`crate::system::System`]); one it does not support is refused with exit
+//! status 2 and a message naming the option ([`crate::system::Failure`]).
 
+mod analyze;
 mod run;
 mod sweep;
 
-pub use run::{run, RunLength, Setup};
-pub use sweep::{sweep, SweepBase, SweepReport, Sweeps};
+pub use analyze::analyze;
+pub use run::run;
+pub use sweep::{sweep, MAX_KEEP};
 
-use crate::external::HilRequest;
-use crate::output::OutputError;
-use crate::plot::PlotError;
-use crate::scene::SceneError;
-use std::fmt;
+use crate::system::{Failure, HilRequest};
+use clap::Args;
 use std::path::PathBuf;
 
-/// Exit status for a bad scene or bad arguments.
-pub const EXIT_SCENE: u8 = 2;
-/// Exit status for a failed run (controller, I/O).
-pub const EXIT_RUN: u8 = 1;
-
-/// A failed command: its exit status and what to tell the user.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Failure {
-    /// [`EXIT_SCENE`] or [`EXIT_RUN`].
-    pub code: u8,
-    /// The message (printed after `error: `).
-    pub message: String,
-}
-
-impl Failure {
-    /// A bad scene (exit 2): `bad scene: ...`.
-    pub fn scene(e: impl fmt::Display) -> Self {
-        Self {
-            code: EXIT_SCENE,
-            message: format!("bad scene: {e}"),
-        }
-    }
-
-    /// Bad arguments (exit 2).
-    pub fn usage(m: impl fmt::Display) -> Self {
-        Self {
-            code: EXIT_SCENE,
-            message: m.to_string(),
-        }
-    }
-
-    /// A failed run (exit 1).
-    pub fn run(m: impl fmt::Display) -> Self {
-        Self {
-            code: EXIT_RUN,
-            message: m.to_string(),
-        }
-    }
-
-    /// The same failure with `context` after its message (e.g. the swept value).
-    pub fn at(mut self, context: impl fmt::Display) -> Self {
-        self.message = format!("{} ({context})", self.message);
-        self
-    }
-}
-
-impl fmt::Display for Failure {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.message)
-    }
-}
-
-impl From<SceneError> for Failure {
-    fn from(e: SceneError) -> Self {
-        Failure::scene(e)
-    }
-}
-
-impl From<OutputError> for Failure {
-    fn from(e: OutputError) -> Self {
-        Failure::run(e)
-    }
-}
-
-impl From<PlotError> for Failure {
-    fn from(e: PlotError) -> Self {
-        Failure::run(format!("plot: {e}"))
-    }
-}
-
-/// `dexter run SCENE ...` as parsed from the command line.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// `dexter run SCENE ...` as parsed from the command line (the doc comment of each field
+/// is its `--help` line).
+#[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct RunRequest {
-    /// `--set key.path=value`, unparsed, in order.
-    pub sets: Vec<String>,
-    /// `--impacts N`: the run's length in the system's events (impacts, hops, bats).
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Events to simulate: impacts, hops or bats (line scenes: overrides stop.impacts; the
+    /// duration limit becomes N x 60 s, a cap for runs whose ball stops bouncing).
+    #[arg(long, conflicts_with = "duration")]
     pub impacts: Option<u64>,
-    /// `--duration S`: simulated seconds (systems with a time limit).
+    /// Simulated seconds (line scenes: overrides stop.duration_s; the impact limit is lifted).
+    #[arg(long)]
     pub duration: Option<f64>,
-    /// `--trace FILE.csv`: one row per event.
+    /// Override a scene key: key.path=value (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Write the trace as CSV, one row per event (a missing directory is created).
+    #[arg(long, value_name = "FILE.csv")]
     pub trace: Option<PathBuf>,
-    /// `--plot DIR`: SVG + PNG plots.
+    /// Write plots (SVG + PNG) into this directory.
+    #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
-    /// `--json`: one JSON object instead of the human summary.
+    /// Print the summary as one JSON object.
+    #[arg(long)]
     pub json: bool,
-    /// `--hil ...`: the controller runs as firmware in QEMU.
-    pub hil: Option<HilRequest>,
+    /// Hardware in the loop: the firmware in QEMU is the controller.
+    #[arg(long)]
+    pub hil: bool,
+    /// The `--hil` options (each requires `--hil`).
+    #[command(flatten)]
+    pub target: HilRequest,
+}
+
+impl RunRequest {
+    /// The `--hil` options, if `--hil` was given.
+    pub fn on_target(&self) -> Option<&HilRequest> {
+        self.hil.then_some(&self.target)
+    }
 }
 
 /// `dexter sweep SCENE ...` as parsed from the command line.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct SweepRequest {
-    /// `--set key.path=value`, unparsed, in order.
-    pub sets: Vec<String>,
-    /// `--range key.path=FROM:TO:N`, unparsed.
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// The swept key and its values: key.path=FROM:TO:N.
+    #[arg(long, value_name = "KEY=FROM:TO:N")]
     pub range: String,
-    /// `--range2 key.path=FROM:TO:M`, unparsed: a second axis (systems that map two).
+    /// A second swept key for a two-dimensional map (planar scenes): key.path=FROM:TO:N.
+    #[arg(long, value_name = "KEY=FROM:TO:N")]
     pub range2: Option<String>,
-    /// `--keep K`: late values kept per point (systems that keep values).
+    /// Override a scene key: key.path=value (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Late values kept from the end of each run.
+    #[arg(long, default_value_t = 64)]
     pub keep: usize,
-    /// `--csv FILE`: the points as CSV (else on stdout).
+    /// Write the points as CSV (a missing directory is created; else on stdout).
+    #[arg(long, value_name = "FILE.csv")]
     pub csv: Option<PathBuf>,
-    /// `--plot DIR`: the sweep's plot.
+    /// Write the sweep's plot into this directory.
+    #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
 }
 
 /// `dexter analyze SCENE ...` as parsed from the command line.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Args, Clone, Debug, Default, PartialEq)]
 pub struct AnalyzeRequest {
-    /// `--set key.path=value`, unparsed, in order.
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Override a scene key: key.path=value (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
-    /// `--json`: one JSON object instead of the human report.
+    /// Print one JSON object instead of the human report.
+    #[arg(long)]
     pub json: bool,
 }
 

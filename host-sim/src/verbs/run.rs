@@ -1,49 +1,16 @@
 //! `dexter run`, for every system.
 
-use super::{print_result, Failure, RunRequest};
+use super::{print_result, RunRequest};
 use crate::controller::StepController;
-use crate::external::{HilRequest, OnTarget};
 use crate::output::{TraceFile, TraceRow};
 use crate::scene::{parse_sets, SceneFile};
-use crate::systems::{unsupported, Outcome, Plots, System};
-
-/// `--impacts` and `--duration` as given.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RunLength {
-    /// `--impacts N`.
-    pub impacts: Option<u64>,
-    /// `--duration S`.
-    pub duration: Option<f64>,
-}
-
-impl RunLength {
-    /// Refuse `--duration` for a system without a time limit.
-    pub fn no_duration<S: System>(&self) -> Result<(), Failure> {
-        match self.duration {
-            Some(_) => Err(unsupported::<S>("--duration")),
-            None => Ok(()),
-        }
-    }
-}
-
-/// What a run records besides its summary.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Setup {
-    /// The plots are drawn: record what only they need (e.g. phase-portrait samples).
-    pub plot: bool,
-    /// Show a progress bar on a terminal.
-    pub progress: bool,
-}
+use crate::system::{unsupported, Failure, HilRequest, OnTarget, Outcome, Plots, Setup, System};
 
 /// `dexter run` on a scene of system `S`: parse, run (streaming the trace and the plots'
 /// points), commit the trace, draw the plots, print the summary.
 pub fn run<S: System>(file: &SceneFile, req: &RunRequest) -> Result<(), Failure> {
     let mut table = file.table_with(&parse_sets(&req.sets)?)?;
-    let length = RunLength {
-        impacts: req.impacts,
-        duration: req.duration,
-    };
-    S::set_length(&mut table, &length)?;
+    S::LENGTH.apply(S::NAME, &mut table, req.impacts, req.duration)?;
     let cfg = S::parse(file, table)?;
     let mut trace = match &req.trace {
         Some(p) => Some(TraceFile::create(p, <S::Row as TraceRow>::HEADER)?),
@@ -68,7 +35,7 @@ pub fn run<S: System>(file: &SceneFile, req: &RunRequest) -> Result<(), Failure>
         true => &mut record,
         false => &mut ignore,
     };
-    let outcome = match &req.hil {
+    let outcome = match req.on_target() {
         None => S::run(&cfg, None, &setup, rows)?,
         Some(h) => run_on_target::<S>(&cfg, h, &setup, rows)?,
     };

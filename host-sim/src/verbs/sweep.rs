@@ -2,89 +2,22 @@
 //!
 //! The base scene (`--set` applied) is validated once, so a bad file fails before the sweep
 //! starts. The points of the grid are evaluated on every core and consumed in serial order
-//! ([`crate::sweep::map_ordered`]): each point's CSV rows are streamed (to `--csv FILE`,
+//! ([`crate::grid::map_ordered`]): each point's CSV rows are streamed (to `--csv FILE`,
 //! committed whole at the end, else to stdout) and the system's report keeps what its
 //! summary and plot need. Then the summary is printed (to stdout with `--csv`, else to
 //! stderr, after the CSV), and the plot drawn.
 
-use super::{Failure, SweepRequest};
+use super::SweepRequest;
+use crate::grid::{map_ordered, Grid, Range};
 use crate::output::AtomicFile;
 use crate::progress;
-use crate::scene::{parse_sets, SceneError, SceneFile};
-use crate::sweep::{map_ordered, Grid, Range};
-use crate::systems::{unsupported, System};
+use crate::scene::{parse_sets, SceneFile};
+use crate::system::{unsupported, Failure, SweepBase, SweepReport, Sweeps};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Most late values a sweep keeps per point (`--keep`).
 pub const MAX_KEEP: usize = 100_000;
-
-/// A system that sweeps: how one point is evaluated and reported.
-pub trait Sweeps: System {
-    /// What one point's evaluation produced.
-    type Point: Send;
-    /// What the summary and the plot keep of the points, in order.
-    type Report: SweepReport<Self>;
-    /// True if a second axis (`--range2`) is accepted.
-    const TWO_AXES: bool = false;
-    /// True if `--keep` is used (else it is ignored, as documented).
-    const KEEPS: bool = true;
-
-    /// Refuse a key this system cannot sweep (the error names it).
-    fn check_key(key: &str) -> Result<(), SceneError> {
-        let _ = key;
-        Ok(())
-    }
-
-    /// Evaluate the scene with the swept value(s) set.
-    fn point(base: &SweepBase<Self>, x: f64, y: Option<f64>) -> Result<Self::Point, Failure>;
-
-    /// A report for this sweep.
-    fn report(base: &SweepBase<Self>) -> Self::Report;
-}
-
-/// What every point of a sweep starts from.
-pub struct SweepBase<'a, S: System> {
-    /// The scene file.
-    pub file: &'a SceneFile,
-    /// Its table with `--set` applied.
-    pub table: toml::Table,
-    /// The base scene, validated.
-    pub config: S::Config,
-    /// The points.
-    pub grid: Grid,
-    /// `--keep`.
-    pub keep: usize,
-}
-
-impl<S: System> SweepBase<'_, S> {
-    /// The base table with `key` set to `value`.
-    pub fn table_with(&self, key: &str, value: toml::Value) -> Result<toml::Table, Failure> {
-        let mut t = self.table.clone();
-        crate::scene::apply_set(&mut t, key, value)?;
-        Ok(t)
-    }
-}
-
-/// A sweep's output besides the CSV rows: its summary and its plot.
-pub trait SweepReport<S: Sweeps> {
-    /// The CSV header.
-    fn csv_header(&self) -> String;
-    /// One point's CSV rows.
-    fn write_csv(
-        &self,
-        x: f64,
-        y: Option<f64>,
-        p: &S::Point,
-        w: &mut dyn Write,
-    ) -> std::io::Result<()>;
-    /// Keep what the summary and the plot need of a point (bounded).
-    fn add(&mut self, x: f64, y: Option<f64>, p: S::Point);
-    /// The summary (may be empty); `csv` is the file the CSV went to, if any.
-    fn summary(&self, csv: Option<&Path>) -> Result<String, Failure>;
-    /// Draw the plot into `dir`; the files written.
-    fn plot(&self, dir: &Path) -> Result<Vec<PathBuf>, Failure>;
-}
 
 /// Where the CSV goes.
 enum CsvOut {

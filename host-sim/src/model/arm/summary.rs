@@ -1,7 +1,7 @@
 //! One call for a system module: plan, verify, check the friction margin, optionally
 //! track on the core, and return a serializable summary with what the plots need.
 //!
-//! JSON keys (issue 15): `task`, `phases`, `mu_required`, `planner_iterations`,
+//! JSON keys (`docs/arm.md`): `task`, `phases`, `mu_required`, `planner_iterations`,
 //! `planner_wall_time_s`, `goal_error`, `executed` (`"ok"`, `"slipped"`,
 //! `"lost_contact"`, `"missed"`), `mu_margin_check` (the run at 0.95 mu), plus
 //! `trajectory` (its knots), `events`, `tracked` (the closed loop on the core). What only
@@ -23,7 +23,8 @@ use crate::controller::StepController;
 use dexter_core::arm_control::ArmController;
 use serde::Serialize;
 
-/// Factor of the margin check (issue 15: "mu 5 % below the plan's value").
+/// Factor of the margin check: the plan must still hold with mu 5 % below the value it
+/// was planned with.
 pub const MARGIN_FACTOR: f64 = 0.95;
 /// Interval of trajectory samples in the summary, s.
 pub const TRAJECTORY_DT_S: f64 = 0.005;

@@ -1,5 +1,5 @@
-//! Simulated execution of a plan, its summary (the JSON of issue 16) and the sweep over
-//! random arrival poses.
+//! Simulated execution of a plan, its summary (the feeder's JSON keys, `docs/feeder.md`)
+//! and the sweep over random arrival poses.
 
 use super::geometry::{Pose, Vec2};
 use super::planner::goal::goal_edge;
@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 /// A feed succeeds when the part ends on the goal edge within this distance of the goal
-/// radius, m (issue 16: 1 mm).
+/// radius, m (1 mm: a part is fed when it ends on the goal edge to 1 mm).
 pub const FEED_TOL_M: f64 = 1e-3;
 
 /// Perturbations of an execution (the plan is made with the nominal values); each is a
@@ -230,7 +230,8 @@ pub struct Stage {
     pub belt_speed_mps: f64,
 }
 
-/// The JSON summary of one planned and simulated feed (issue 16's keys first).
+/// The JSON summary of one planned and simulated feed (the keys `docs/feeder.md` documents
+/// first).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Summary {
     /// Goal edge (index into the part's convex hull, counter-clockwise).

@@ -15,7 +15,6 @@
 //! | [`primitives`] | stable push, turn, jog, convergent turn as fence schedules |
 //! | [`pushes`] | rate-scheduled stable pushes: the window of stable fence rates, profiles |
 //! | [`planner`] | goal edge, edge sequences, parameter optimization (COBYLA) |
-//! | [`scene`] | the scene's tables (serde) and their validation |
 //! | [`execute`] | simulated execution with noise, the JSON summary, the arrival sweep |
 //!
 //! Conventions: world origin at the fence pivot, belt velocity `(0, -v_b)`, fence angle
@@ -30,7 +29,6 @@ pub mod planner;
 pub mod primitives;
 pub mod pushes;
 pub mod quasistatic;
-pub mod scene;
 pub mod sim;
 pub mod stability;
 pub mod support;

@@ -38,7 +38,7 @@
 //! the tilt block is eq. 11 for every e: the type change happens at eq. 16's kappa_crit, not
 //! eq. 26's (see `docs/planar.md`).
 
-use super::{Body, PlanarError, PlanarModel, PlanarParams, PlanarState, RunEnd};
+use super::{Body, PlanarError, PlanarModel, PlanarState, RunEnd};
 use dexter_core::tilt::{
     energy_eigenvalue, kappa_crit, kappa_e_max, kappa_e_max_as_printed, tilt_eigenvalues,
 };
@@ -487,92 +487,6 @@ pub fn analyze(model: &PlanarModel) -> Result<AnalysisReport, PlanarError> {
         },
         closed_form_max_abs_diff: diff,
     })
-}
-
-/// The class of one stability-map cell (sec. 2.3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CellClass {
-    /// Stayed up for all impacts, the mean of eta over the last quarter of impacts lies within
-    /// [`ENERGY_TOL`] of eta* (eta itself keeps oscillating with the tilt, whose eigenvalues
-    /// sit on the unit circle), and the tilt amplitude did not grow (last quarter's max
-    /// |theta| <= [`GROWTH_TOL`] x the first quarter's).
-    Converges,
-    /// Stayed up for all impacts but the energy did not settle or the tilt grew.
-    Drifts,
-    /// |theta| reached the tip angle.
-    TipsOver,
-    /// The run failed otherwise (no separation, no contact, jam, non-finite) or the energy
-    /// exceeded 100 eta*.
-    Diverges,
-}
-
-/// Relative tolerance on the late mean energy of [`CellClass::Converges`].
-pub const ENERGY_TOL: f64 = 0.02;
-/// Amplitude-growth tolerance of [`CellClass::Converges`].
-pub const GROWTH_TOL: f64 = 1.1;
-
-/// One cell of a stability map.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Cell {
-    /// theta0, rad.
-    pub theta0_rad: f64,
-    /// kappa, dimensionless.
-    pub kappa: f64,
-    /// The class.
-    pub class: CellClass,
-    /// Impacts simulated before the run ended.
-    pub impacts: usize,
-    /// max |theta| at impacts, rad.
-    pub max_abs_theta_rad: f64,
-}
-
-/// Classify a run of `model` (see [`CellClass`]): [`super::stats::RunStats::class`] on
-/// every impact of the run.
-pub fn classify(model: &PlanarModel, run: &super::PlanarRun) -> CellClass {
-    let mut stats = super::stats::RunStats::new(model, run.impacts.len());
-    for r in &run.impacts {
-        stats.push(r);
-    }
-    stats.class(run.end)
-}
-
-/// A stability map over `thetas_rad` (rows) x `kappas` (columns): each cell is the scene
-/// `base` with that initial angle and kappa, run for `impacts` impacts and classified.
-pub fn stability_map(
-    base: &PlanarParams,
-    thetas_rad: &[f64],
-    kappas: &[f64],
-    impacts: usize,
-) -> Result<Vec<Vec<Cell>>, PlanarError> {
-    let mut rows = Vec::with_capacity(thetas_rad.len());
-    for &theta0 in thetas_rad {
-        let mut row = Vec::with_capacity(kappas.len());
-        for &kappa in kappas {
-            let p = PlanarParams {
-                initial_theta_rad: theta0,
-                kappa,
-                impacts,
-                ..base.clone()
-            };
-            let model = p.build()?;
-            let mut stats = super::stats::RunStats::new(&model, impacts);
-            let mut max_theta = 0.0f64;
-            let done = model.run_streaming(p.start()?, impacts, p.seed, &mut |r| {
-                stats.push(r);
-                max_theta = max_theta.max(r.before.theta_rad.abs());
-            });
-            row.push(Cell {
-                theta0_rad: theta0,
-                kappa,
-                class: stats.class(done.end),
-                impacts: done.impacts,
-                max_abs_theta_rad: max_theta,
-            });
-        }
-        rows.push(row);
-    }
-    Ok(rows)
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 //! The figures issue 11 asks for: `impacts`, `tipped_over`, `late_theta_max_rad`,
 //! `late_energy_error` (relative to eta*), the impact-time prediction error and the safe
 //! steps by fault. The **late window** is the last quarter of the impacts (as
-//! [`super::analysis::classify`] uses).
+//! [`super::stats::classify`] uses).
 
 use super::{PlanarModel, PlanarRun, PlanarState, RunEnd};
 use crate::controller::HilReport;

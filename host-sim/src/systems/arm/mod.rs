@@ -16,7 +16,6 @@ pub mod trace;
 
 use self::summary::{compare_trajectories, ArmOutcome};
 use self::trace::ArmRow;
-use super::{unsupported, System};
 use crate::controller::StepController;
 use crate::model::arm::closed_loop::{sil_controller, track_sil};
 use crate::model::arm::params::ArmConfig;
@@ -24,7 +23,7 @@ use crate::model::arm::planner::{plan, Plan};
 use crate::model::arm::summary::run_with;
 use crate::model::arm::{ArmError, ArmScene};
 use crate::scene::{deserialize, SceneError, SceneFile};
-use crate::verbs::{Failure, RunLength, Setup};
+use crate::system::{Failure, RunLength, Setup, System};
 use dexter_core::arm_control::{ArmController, ArmParams};
 use dexter_core::params::ParamError;
 use std::sync::OnceLock;
@@ -86,8 +85,9 @@ fn param_error(e: ParamError) -> SceneError {
 
 impl System for ArmSystem {
     const NAME: &'static str = "arm";
-    const TABLE: &'static str = "arm";
-    const IMPACTS_KEY: &'static str = "";
+    /// A run is the planned motion, settled and held: neither `--impacts` nor
+    /// `--duration` applies.
+    const LENGTH: RunLength = RunLength::Fixed;
     type Config = ArmRunConfig;
     type Controller = ArmController;
     type Row = ArmRow;
@@ -96,16 +96,6 @@ impl System for ArmSystem {
 
     fn claims(table: &toml::Table) -> bool {
         table.contains_key("arm") || table.contains_key("task")
-    }
-
-    /// A run is the planned motion, settled and held: neither `--impacts` nor
-    /// `--duration` applies.
-    fn set_length(_: &mut toml::Table, length: &RunLength) -> Result<(), Failure> {
-        length.no_duration::<Self>()?;
-        match length.impacts {
-            Some(_) => Err(unsupported::<Self>("--impacts")),
-            None => Ok(()),
-        }
     }
 
     fn parse(file: &SceneFile, table: toml::Table) -> Result<ArmRunConfig, SceneError> {

@@ -15,8 +15,8 @@ use crate::model::arm::geometry::V2;
 use crate::model::arm::simulate;
 use crate::model::arm::summary::MARGIN_FACTOR;
 use crate::plot::Chart;
-use crate::systems::Plots;
-use crate::verbs::Failure;
+use crate::system::Failure;
+use crate::system::Plots;
 use std::path::{Path, PathBuf};
 
 /// Panels of the filmstrip (three rows of four).

@@ -12,7 +12,7 @@ use crate::model::arm::summary::ArmSummary;
 use crate::model::arm::Solver;
 use crate::output::{json_text, JsonStyle};
 use crate::stream::Decimator;
-use crate::systems::Outcome;
+use crate::system::Outcome;
 use dexter_core::arm_control::ArmController;
 use dexter_core::fixed_rate::FixedRate;
 use serde::Serialize;

@@ -7,20 +7,20 @@
 //! `docs/feeder.md`.
 
 pub mod plots;
+pub mod scene;
 pub mod summary;
 pub mod sweep;
 pub mod trace;
 
 use self::summary::FeederOutcome;
 use self::trace::FeederRow;
-use super::{unsupported, NoController, System};
 use crate::controller::StepController;
 use crate::model::feeder::execute::{execute_observed, summarize};
 use crate::model::feeder::planner::plan;
-use crate::model::feeder::scene::{Built, FeederFile, FeederScene};
 use crate::model::feeder::FeederError;
 use crate::scene::{deserialize, SceneError, SceneFile};
-use crate::verbs::{Failure, RunLength, Setup, SweepRequest};
+use crate::system::{Failure, NoController, RunLength, Setup, System};
+use scene::{Built, FeederFile, FeederScene};
 use std::time::Instant;
 
 /// The feeder system.
@@ -61,21 +61,16 @@ impl FeederConfig {
 
 impl System for FeederSystem {
     const NAME: &'static str = "feeder";
-    const TABLE: &'static str = "feeder";
-    /// Unused: a feed has no event count (`--impacts` is refused).
-    const IMPACTS_KEY: &'static str = "feeder";
+    /// A feed runs its plan: it has no event count or time limit to set.
+    const LENGTH: RunLength = RunLength::Fixed;
     type Config = FeederConfig;
     type Controller = NoController;
     type Row = FeederRow;
     type Outcome = FeederOutcome;
     type Plots = plots::FeederPlots;
 
-    fn set_length(_: &mut toml::Table, length: &RunLength) -> Result<(), Failure> {
-        length.no_duration::<Self>()?;
-        match length.impacts {
-            Some(_) => Err(unsupported::<Self>("--impacts")),
-            None => Ok(()),
-        }
+    fn claims(table: &toml::Table) -> bool {
+        table.contains_key("feeder")
     }
 
     fn parse(file: &SceneFile, table: toml::Table) -> Result<FeederConfig, SceneError> {
@@ -97,9 +92,5 @@ impl System for FeederSystem {
             rows(&FeederRow::new(r, names.get(r.step).copied().unwrap_or("")))
         });
         Ok(FeederOutcome::new(cfg, summarize(&b.feeder, p, ex, wall_s)))
-    }
-
-    fn sweep(file: &SceneFile, req: &SweepRequest) -> Result<(), Failure> {
-        crate::verbs::sweep::<Self>(file, req)
     }
 }

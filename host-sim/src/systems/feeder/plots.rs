@@ -18,8 +18,8 @@ use crate::model::feeder::execute::{Frame as Knot, Summary};
 use crate::model::feeder::primitives::Primitive;
 use crate::plot::Chart;
 use crate::stream::Decimator;
-use crate::systems::Plots;
-use crate::verbs::Failure;
+use crate::system::Failure;
+use crate::system::Plots;
 use std::path::{Path, PathBuf};
 
 /// Palette slots of the filmstrip's shapes.

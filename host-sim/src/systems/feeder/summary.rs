@@ -5,7 +5,7 @@ use super::FeederConfig;
 use crate::model::feeder::execute::{Summary, FEED_TOL_M};
 use crate::model::feeder::primitives::Primitive;
 use crate::output::{json_text, JsonStyle};
-use crate::systems::Outcome;
+use crate::system::Outcome;
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -14,7 +14,7 @@ use std::fmt::Write as _;
 pub struct FeederReport {
     /// Scene name.
     pub scene: String,
-    /// The plan and its execution (issue 16's keys first).
+    /// The plan and its execution (the keys `docs/feeder.md` documents first).
     #[serde(flatten)]
     pub summary: Summary,
     /// The part's convex hull, body frame (origin at the center of mass), m; hull edge i

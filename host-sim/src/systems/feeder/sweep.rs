@@ -22,7 +22,7 @@ use crate::output::Sig17;
 use crate::plot::{key_label, Chart};
 use crate::scene::SceneError;
 use crate::stream::Decimator;
-use crate::verbs::{Failure, SweepBase, SweepReport, Sweeps};
+use crate::system::{Failure, SweepBase, SweepReport, Sweeps};
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};

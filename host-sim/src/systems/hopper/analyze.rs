@@ -1,15 +1,13 @@
 //! `dexter analyze` on a hopper scene: the fixed point of the simulated cycle map and its
 //! slope by finite differences, beside the closed forms.
 
-use super::closed::{none_reason, ClosedForm, ALPHA_DOUBLING};
+use super::closed_forms::{none_reason, ClosedForm, ALPHA_DOUBLING};
 use super::summary::{period_of, TAIL_CYCLES};
-use super::{end_name, model_equation, model_name, HopperConfig, HopperSystem};
+use super::{end_name, model_equation, model_name, HopperConfig};
 use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Cycle, RunEnd, RunOptions, Start};
-use crate::scene::{parse_sets, SceneFile};
 use crate::stream::Tail;
-use crate::systems::System;
-use crate::verbs::{print_result, AnalyzeRequest, Failure};
+use crate::system::{Failure, Report};
 use serde_json::json;
 
 /// Relative finite-difference step for the closed-form models (4th-order central stencil:
@@ -214,7 +212,7 @@ fn scene_run(sc: &HopperConfig, coord: Coord) -> Result<(f64, usize, Option<usiz
 }
 
 /// Everything `analyze` reports.
-struct Analysis<'a> {
+pub struct Analysis<'a> {
     sc: &'a HopperConfig,
     coord: Coord,
     fp: FixedPoint,
@@ -257,7 +255,7 @@ impl Analysis<'_> {
         })
     }
 
-    fn json(&self) -> serde_json::Value {
+    fn json_value(&self) -> serde_json::Value {
         let (sc, fp) = (self.sc, &self.fp);
         json!({
             "scene": sc.name,
@@ -290,7 +288,7 @@ impl Analysis<'_> {
         })
     }
 
-    fn text(&self) -> String {
+    fn human(&self) -> String {
         let (sc, fp) = (self.sc, &self.fp);
         let mut s = format!(
             "hopper scene {}: {} model ({})\n  cycle map in the {} ({}, Newton {} iterations, residual {:.1e})\n",
@@ -347,22 +345,28 @@ impl Analysis<'_> {
     }
 }
 
+impl Report for Analysis<'_> {
+    fn text(&self) -> String {
+        self.human()
+    }
+    fn json(&self) -> Result<String, String> {
+        Ok(self.json_value().to_string())
+    }
+}
+
 /// `dexter analyze` on a hopper scene.
-pub fn analyze(file: &SceneFile, req: &AnalyzeRequest) -> Result<(), Failure> {
-    let table = file.table_with(&parse_sets(&req.sets)?)?;
-    let sc = HopperSystem::parse(file, table)?;
-    let coord = Coord::of(&sc);
-    let (u0, cycles, late_period) = scene_run(&sc, coord)?;
-    let fp = CycleMap { sc: &sc, coord }.fixed_point(u0)?;
-    let cf = ClosedForm::of(&sc);
-    let a = Analysis {
-        sc: &sc,
+pub fn analyze(sc: &HopperConfig) -> Result<Analysis<'_>, Failure> {
+    let coord = Coord::of(sc);
+    let (u0, cycles, late_period) = scene_run(sc, coord)?;
+    let fp = CycleMap { sc, coord }.fixed_point(u0)?;
+    let cf = ClosedForm::of(sc);
+    Ok(Analysis {
+        sc,
         coord,
         fp,
         closed: cf.and_then(|c| Some((c, c.fixed_energy()?, c.fixed_slope()?))),
         alpha: cf.and_then(|c| c.alpha()),
         cycles,
         late_period,
-    };
-    print_result(req.json, || a.text(), || Ok(a.json().to_string()))
+    })
 }

@@ -14,7 +14,7 @@
 //! on the MCU (`--hil`).
 
 pub mod analyze;
-pub mod closed;
+pub mod closed_forms;
 pub mod plots;
 pub mod sampled;
 pub mod summary;
@@ -23,13 +23,12 @@ pub mod trace;
 
 use self::summary::{HopperOutcome, Trajectory};
 use self::trace::HopperRow;
-use super::{NoController, System};
 use crate::controller::StepController;
 use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Hopper, HopperParams, RunEnd, Start, MAX_SAMPLES};
 use crate::progress::Progress;
 use crate::scene::{deserialize, SceneError, SceneFile};
-use crate::verbs::{AnalyzeRequest, Failure, Setup, SweepRequest};
+use crate::system::{Analyzes, Failure, NoController, Report, RunLength, Setup, System};
 use serde::Deserialize;
 use std::time::Instant;
 
@@ -142,14 +141,21 @@ pub fn start_height(s: &Start) -> f64 {
 
 impl System for HopperSystem {
     const NAME: &'static str = "hopper";
-    const TABLE: &'static str = "hopper";
-    const IMPACTS_KEY: &'static str = "hopper.cycles";
-    const MAX_IMPACTS: u64 = MAX_RUN_CYCLES;
+    const LENGTH: RunLength = RunLength::Events {
+        key: "hopper.cycles",
+        max: MAX_RUN_CYCLES,
+    };
     type Config = HopperConfig;
     type Controller = NoController;
     type Row = HopperRow;
     type Outcome = HopperOutcome;
     type Plots = plots::HopperPlots;
+
+    /// A `[hopper]` table (the sampled hopper, asked first, takes those with
+    /// `[hopper.control]`).
+    fn claims(table: &toml::Table) -> bool {
+        table.contains_key("hopper")
+    }
 
     fn parse(file: &SceneFile, table: toml::Table) -> Result<HopperConfig, SceneError> {
         HopperConfig::from_table(&file.stem, table)
@@ -210,12 +216,14 @@ impl System for HopperSystem {
             wall.elapsed().as_secs_f64(),
         ))
     }
+}
 
-    fn sweep(file: &SceneFile, req: &SweepRequest) -> Result<(), Failure> {
-        crate::verbs::sweep::<Self>(file, req)
-    }
-
-    fn analyze(file: &SceneFile, req: &AnalyzeRequest) -> Result<(), Failure> {
-        analyze::analyze(file, req)
+impl Analyzes for HopperSystem {
+    fn analyze<'a>(
+        file: &'a SceneFile,
+        cfg: &'a HopperConfig,
+    ) -> Result<Box<dyn Report + 'a>, Failure> {
+        let _ = file;
+        Ok(Box::new(analyze::analyze(cfg)?))
     }
 }

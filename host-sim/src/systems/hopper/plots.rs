@@ -3,15 +3,15 @@
 //! with f(E)) and `{scene}-phase` (chi' against chi, figs. 7-13). The successive pairs of
 //! each start keep at most [`crate::stream::PLOT_MAX_POINTS`] points.
 
-use super::closed::ClosedForm;
+use super::closed_forms::ClosedForm;
 use super::summary::HopperOutcome;
 use super::trace::HopperRow;
 use super::{model_equation, start_text, HopperConfig, HopperSystem};
 use crate::model::hopper::params::ModelKind;
 use crate::plot::Chart;
 use crate::stream::Decimator;
-use crate::systems::Plots;
-use crate::verbs::Failure;
+use crate::system::Failure;
+use crate::system::Plots;
 use std::path::{Path, PathBuf};
 
 /// Palette slots ([`crate::plot::series`] colours series by index): simulated dots take

@@ -3,7 +3,7 @@
 //! its last [`TAIL_CYCLES`] cycles: enough for the period and the late values, whatever the
 //! run's length.
 
-use super::closed::{none_reason, ClosedForm, ALPHA_DOUBLING};
+use super::closed_forms::{none_reason, ClosedForm, ALPHA_DOUBLING};
 use super::{
     end_name, model_equation, model_name, start_height, start_text, HopperConfig, PERIOD_TOL,
 };
@@ -12,7 +12,7 @@ use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Cycle, RunEnd, Sample, Start};
 use crate::period::Tolerance;
 use crate::stream::Tail;
-use crate::systems::Outcome;
+use crate::system::Outcome;
 use serde_json::{json, Value};
 
 /// Late values reported per trajectory.

@@ -4,7 +4,7 @@
 //! per kept cycle. Over the thrust of eq. 9 the first period doubling is located
 //! ([`locate_first_doubling`]) and printed beside the closed form alpha = e^2.
 
-use super::closed::{ClosedForm, ALPHA_DOUBLING};
+use super::closed_forms::{ClosedForm, ALPHA_DOUBLING};
 use super::summary::period_of;
 use super::{end_name, HopperConfig, HopperSystem};
 use crate::model::hopper::analysis::locate_first_doubling;
@@ -12,7 +12,7 @@ use crate::model::hopper::{HopperModel, RunEnd, RunOptions};
 use crate::output::Sig17;
 use crate::plot::{key_label, Chart};
 use crate::stream::Decimator;
-use crate::verbs::{Failure, SweepBase, SweepReport, Sweeps};
+use crate::system::{Failure, SweepBase, SweepReport, Sweeps};
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};

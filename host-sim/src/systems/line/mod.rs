@@ -30,11 +30,10 @@ use self::run::{run_streaming, RunOptions};
 use self::scene::{ControlMode, Scene};
 use self::summary::Summary;
 use self::trace::ImpactRow;
-use super::{Outcome, System};
 use crate::controller::{HilReport, SafeSteps, StepController};
 use crate::output::{json_text, JsonStyle};
 use crate::scene::{SceneError, SceneFile};
-use crate::verbs::{Failure, RunLength, Setup, SweepRequest};
+use crate::system::{Failure, Outcome, RunLength, Setup, System};
 use dexter_core::control::{Controller, ControllerParams};
 
 /// The line system.
@@ -85,35 +84,24 @@ fn needs_sil(scene: &Scene) -> SceneError {
 
 impl System for LineSystem {
     const NAME: &'static str = "line";
-    /// No table of its own: `[physics]`, `[control]`, ... (`docs/scenes.md`).
-    const TABLE: &'static str = "";
-    const IMPACTS_KEY: &'static str = "stop.impacts";
+    /// `--impacts N` sets `stop.impacts` and caps the time at N x 60 s (for runs whose
+    /// ball stops bouncing); `--duration S` sets `stop.duration_s` and lifts the impacts.
+    const LENGTH: RunLength = RunLength::EventsOrTime {
+        events: "stop.impacts",
+        time: "stop.duration_s",
+        cap_s: 60.0,
+    };
     type Config = Scene;
     type Controller = Controller;
     type Row = ImpactRow;
     type Outcome = LineOutcome;
     type Plots = plots::LinePlots;
 
-    /// Every scene: the registry asks the line system last, so it runs the scenes no
+    /// Every scene (it has no table of its own: `[physics]`, `[control]`, ...,
+    /// `docs/scenes.md`): the registry asks the line system last, so it runs the scenes no
     /// other system claims.
     fn claims(_: &toml::Table) -> bool {
         true
-    }
-
-    fn set_length(table: &mut toml::Table, length: &RunLength) -> Result<(), Failure> {
-        let set = |t: &mut toml::Table, k: &str, v| crate::scene::apply_set(t, k, v);
-        if let Some(n) = length.impacts {
-            let n = i64::try_from(n)
-                .map_err(|_| Failure::usage(format!("--impacts {n} is too large")))?;
-            set(table, "stop.impacts", toml::Value::Integer(n))?;
-            let cap_s = (n.max(1) as f64) * 60.0;
-            set(table, "stop.duration_s", toml::Value::Float(cap_s))?;
-        }
-        if let Some(d) = length.duration {
-            set(table, "stop.duration_s", toml::Value::Float(d))?;
-            set(table, "stop.impacts", toml::Value::Integer(i64::MAX))?;
-        }
-        Ok(())
     }
 
     fn parse(file: &SceneFile, mut table: toml::Table) -> Result<Scene, SceneError> {
@@ -148,9 +136,5 @@ impl System for LineSystem {
             phase: out.phase,
             gravity_mps2: cfg.physics.gravity_mps2,
         })
-    }
-
-    fn sweep(file: &SceneFile, req: &SweepRequest) -> Result<(), Failure> {
-        crate::verbs::sweep::<Self>(file, req)
     }
 }

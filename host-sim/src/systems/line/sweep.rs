@@ -12,7 +12,7 @@ use super::LineSystem;
 use crate::output::Sig17;
 use crate::plot;
 use crate::stream::{Decimator, Tail};
-use crate::verbs::{Failure, SweepBase, SweepReport, Sweeps};
+use crate::system::{Failure, SweepBase, SweepReport, Sweeps};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -69,7 +69,7 @@ fn late_apexes(
 /// runs the points on every core).
 pub fn sweep(
     base: &toml::Table,
-    range: &crate::sweep::Range,
+    range: &crate::grid::Range,
     keep: usize,
 ) -> Result<Vec<(f64, f64)>, RunError> {
     let mut points = Vec::new();
@@ -140,7 +140,7 @@ impl SweepReport<LineSystem> for LineSweepReport {
 
     fn plot(&self, dir: &Path) -> Result<Vec<PathBuf>, Failure> {
         let label = plot::key_label(&self.key);
-        Ok(plot::bifurcation(
+        Ok(super::plots::bifurcation(
             self.points.values(),
             &label,
             dir,

@@ -1,12 +1,11 @@
 //! `dexter analyze` on a planar scene: the impact-to-impact map linearized at its fixed
 //! point, beside the closed forms (eq. 11, 16, 26; `docs/planar.md`).
 
-use super::PlanarSystem;
+use super::PlanarConfig;
 use crate::model::planar::analysis::{self, AnalysisReport};
 use crate::model::planar::{Body, PlanarModel};
-use crate::scene::{parse_sets, SceneFile};
-use crate::systems::System;
-use crate::verbs::{print_result, AnalyzeRequest, Failure};
+use crate::scene::SceneFile;
+use crate::system::{Failure, Report};
 use std::fmt::Write as _;
 
 /// The label of each closed-form eigenvalue (same order as `ClosedForms::predicted`).
@@ -205,15 +204,28 @@ fn analyze_json(name: &str, r: &AnalysisReport) -> Result<String, String> {
     serde_json::to_string(&v).map_err(json_err)
 }
 
-/// `dexter analyze` on a planar scene.
-pub fn analyze(file: &SceneFile, req: &AnalyzeRequest) -> Result<(), Failure> {
-    let table = file.table_with(&parse_sets(&req.sets)?)?;
-    let cfg = PlanarSystem::parse(file, table)?;
+/// What `analyze` reports of a planar scene.
+pub struct Analysis<'a> {
+    name: &'a str,
+    report: AnalysisReport,
+    model: &'a PlanarModel,
+}
+
+impl Report for Analysis<'_> {
+    fn text(&self) -> String {
+        analyze_text(self.name, &self.report, self.model)
+    }
+    fn json(&self) -> Result<String, String> {
+        analyze_json(self.name, &self.report)
+    }
+}
+
+/// `dexter analyze` on a planar scene (the file names the scene).
+pub fn analyze<'a>(file: &'a SceneFile, cfg: &'a PlanarConfig) -> Result<Analysis<'a>, Failure> {
     let report = analysis::analyze(&cfg.model).map_err(super::planar_failure)?;
-    let name = &file.stem;
-    print_result(
-        req.json,
-        || analyze_text(name, &report, &cfg.model),
-        || analyze_json(name, &report),
-    )
+    Ok(Analysis {
+        name: &file.stem,
+        report,
+        model: &cfg.model,
+    })
 }

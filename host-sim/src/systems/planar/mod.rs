@@ -10,7 +10,7 @@
 //! [`crate::model::planar::MAX_IMPACTS`] (a bound on its time).
 
 pub mod analyze;
-pub mod closed;
+pub mod closed_loop;
 pub mod film;
 pub mod plots;
 pub mod real;
@@ -22,7 +22,6 @@ use self::film::FilmKeeper;
 use self::real::RealTableScene;
 use self::summary::{summarize, summary_text, RunSummary};
 use self::trace::PlanarRow;
-use super::{Outcome, System};
 use crate::controller::{HilReport, SafeSteps, StepController};
 use crate::model::planar::real_table::RealTable;
 use crate::model::planar::stats::RunStats;
@@ -32,7 +31,7 @@ use crate::model::planar::{
 use crate::output::{json_text, JsonStyle};
 use crate::progress::Progress;
 use crate::scene::{deserialize, SceneError, SceneFile};
-use crate::verbs::{AnalyzeRequest, Failure, Setup, SweepRequest};
+use crate::system::{Analyzes, Failure, Outcome, Report, RunLength, Setup, System};
 use dexter_core::tilt_control::{TiltController, TiltParams};
 use serde::Deserialize;
 use std::time::Instant;
@@ -144,14 +143,19 @@ fn config_of(name: &str, table: toml::Table) -> Result<PlanarConfig, SceneError>
 
 impl System for PlanarSystem {
     const NAME: &'static str = "planar";
-    const TABLE: &'static str = "planar";
-    const IMPACTS_KEY: &'static str = "planar.impacts";
-    const MAX_IMPACTS: u64 = MAX_IMPACTS as u64;
+    const LENGTH: RunLength = RunLength::Events {
+        key: "planar.impacts",
+        max: MAX_IMPACTS as u64,
+    };
     type Config = PlanarConfig;
     type Controller = TiltController;
     type Row = PlanarRow;
     type Outcome = PlanarOutcome;
     type Plots = plots::PlanarPlots;
+
+    fn claims(table: &toml::Table) -> bool {
+        table.contains_key("planar")
+    }
 
     fn parse(file: &SceneFile, table: toml::Table) -> Result<PlanarConfig, SceneError> {
         config_of(&file.stem, table)
@@ -175,7 +179,7 @@ impl System for PlanarSystem {
         rows: &mut dyn FnMut(&PlanarRow),
     ) -> Result<PlanarOutcome, Failure> {
         if let Some(table) = &cfg.real {
-            return closed::run_real(cfg, table, ctrl, setup, rows);
+            return closed_loop::run_real(cfg, table, ctrl, setup, rows);
         }
         let p = &cfg.params;
         let t0 = Instant::now();
@@ -198,12 +202,13 @@ impl System for PlanarSystem {
             film: None,
         })
     }
+}
 
-    fn sweep(file: &SceneFile, req: &SweepRequest) -> Result<(), Failure> {
-        crate::verbs::sweep::<Self>(file, req)
-    }
-
-    fn analyze(file: &SceneFile, req: &AnalyzeRequest) -> Result<(), Failure> {
-        analyze::analyze(file, req)
+impl Analyzes for PlanarSystem {
+    fn analyze<'a>(
+        file: &'a SceneFile,
+        cfg: &'a PlanarConfig,
+    ) -> Result<Box<dyn Report + 'a>, Failure> {
+        Ok(Box::new(analyze::analyze(file, cfg)?))
     }
 }

@@ -9,8 +9,8 @@ use super::{PlanarConfig, PlanarOutcome, PlanarSystem};
 use crate::model::planar::{analysis, Body, ImpactRecord};
 use crate::plot::Chart;
 use crate::stream::Decimator;
-use crate::systems::Plots;
-use crate::verbs::Failure;
+use crate::system::Failure;
+use crate::system::Plots;
 use std::path::{Path, PathBuf};
 
 /// Points per flight in the path plot.

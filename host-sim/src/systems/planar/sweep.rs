@@ -1,6 +1,6 @@
 //! `dexter sweep` on a planar scene: the stability map (sec. 2.3). Every cell is the scene
 //! with the swept value(s) set, run for `planar.impacts` and classified by
-//! [`crate::model::planar::analysis::classify`]. CSV: the swept key(s), `class`, `impacts`, `end`,
+//! [`crate::model::planar::stats::classify`]. CSV: the swept key(s), `class`, `impacts`, `end`,
 //! `max_abs_theta_rad`, `late_mean_energy_jpkg`, rows range2-major; with `--csv` a letter
 //! grid and the count of cells upright for all impacts are printed; `--plot` draws
 //! `{stem}-stability`. A scene with a `[real_table]` runs each cell on the real table (SIL),
@@ -8,14 +8,14 @@
 
 use super::summary::{class_name, class_words, kappa_crit_of, summarize};
 use super::{config_of, PlanarSystem};
-use crate::model::planar::analysis::CellClass;
+use crate::model::planar::stats::CellClass;
 use crate::model::planar::stats::RunStats;
 use crate::model::planar::{PlanarParams, RunEnd};
 use crate::output::Sig17;
 use crate::plot::{key_label, Chart};
 use crate::scene::SceneError;
 use crate::stream::Decimator;
-use crate::verbs::{Failure, Setup, SweepBase, SweepReport, Sweeps};
+use crate::system::{Failure, Setup, SweepBase, SweepReport, Sweeps};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -102,7 +102,7 @@ impl Sweeps for PlanarSystem {
         }
         let cfg = config_of(&base.config.name, table)?;
         if let Some(t) = &cfg.real {
-            let out = super::closed::run_real(&cfg, t, None, &Setup::default(), &mut |_| {})?;
+            let out = super::closed_loop::run_real(&cfg, t, None, &Setup::default(), &mut |_| {})?;
             let s = out.summary;
             return Ok(SweepCell {
                 class: s.class,

@@ -15,11 +15,10 @@ pub mod trace;
 
 use self::summary::{ClosedForm, JugglerOutcome};
 use self::trace::BatRow;
-use super::{NoController, System};
 use crate::controller::StepController;
 use crate::model::planar::juggler::{JuggleEnd, JugglerParams, PlanarJuggler, MAX_JUGGLES};
 use crate::scene::{deserialize, SceneError, SceneFile};
-use crate::verbs::{Failure, Setup};
+use crate::system::{Failure, NoController, RunLength, Setup, System};
 use dexter_core::params::ParamError;
 use dexter_core::planar::PlanarBall;
 use serde::{Deserialize, Serialize};
@@ -244,14 +243,19 @@ impl JugglerTable {
 
 impl System for PlanarJugglerSystem {
     const NAME: &'static str = "planar juggler";
-    const TABLE: &'static str = "planar_juggler";
-    const IMPACTS_KEY: &'static str = "planar_juggler.impacts";
-    const MAX_IMPACTS: u64 = MAX_JUGGLES as u64;
+    const LENGTH: RunLength = RunLength::Events {
+        key: "planar_juggler.impacts",
+        max: MAX_JUGGLES as u64,
+    };
     type Config = JugglerConfig;
     type Controller = NoController;
     type Row = BatRow;
     type Outcome = JugglerOutcome;
     type Plots = plots::JugglerPlots;
+
+    fn claims(table: &toml::Table) -> bool {
+        table.contains_key("planar_juggler")
+    }
 
     fn parse(file: &SceneFile, table: toml::Table) -> Result<JugglerConfig, SceneError> {
         deserialize::<JugglerFile>(table)?

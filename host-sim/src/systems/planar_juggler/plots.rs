@@ -10,8 +10,8 @@ use super::{JugglerConfig, PlanarJugglerSystem};
 use crate::model::planar::juggler::JugglerParams;
 use crate::plot::Chart;
 use crate::stream::Decimator;
-use crate::systems::Plots;
-use crate::verbs::Failure;
+use crate::system::Failure;
+use crate::system::Plots;
 use std::path::{Path, PathBuf};
 
 /// Points drawn of eq. 8's map.

@@ -3,7 +3,7 @@
 use super::{end_name, JugglerConfig, Law};
 use crate::model::planar::juggler::{Bat, JuggleRun, JugglerParams};
 use crate::output::{json_text, JsonStyle};
-use crate::systems::Outcome;
+use crate::system::Outcome;
 use serde::Serialize;
 
 /// Relative band around the fixed point's energy and b_x* that counts as converged.

@@ -1,4 +1,4 @@
-//! The hopper on the MCU (issue 12): a `[hopper]` scene with a `[hopper.control]` table
+//! The hopper on the MCU: a `[hopper]` scene with a `[hopper.control]` table
 //! closes its loop through the core's fixed-rate thrust controller
 //! ([`dexter_core::hop_control::HopController`]): in SIL the core linked in, with `--hil`
 //! the firmware in QEMU, lock-step and bit for bit. The plant is the valve-driven hopper of
@@ -8,7 +8,7 @@
 //! | module | what it holds |
 //! | --- | --- |
 //! | [`scene`] | `[hopper.control]`, `[hopper.sensor]` and their checks |
-//! | [`summary`] | the JSON keys of issue 12 and the text summary |
+//! | [`summary`] | the JSON keys (`docs/hopper.md`) and the text summary |
 //! | [`trace`] | one CSV row per hop |
 //! | [`plots`] | the timeline of the last hops: leg, phases, valve |
 //!
@@ -26,8 +26,7 @@ use crate::controller::{Counted, Sil, StepController};
 use crate::model::hopper::sampled::{run_sampled_with, SampledError, MAX_CYCLES};
 use crate::progress::Progress;
 use crate::scene::{SceneError, SceneFile};
-use crate::systems::System;
-use crate::verbs::{Failure, Setup};
+use crate::system::{Failure, RunLength, Setup, System};
 use dexter_core::hop_control::{HopController, HopParams};
 use std::time::Instant;
 
@@ -37,9 +36,10 @@ pub struct SampledHopperSystem;
 
 impl System for SampledHopperSystem {
     const NAME: &'static str = "sampled hopper";
-    const TABLE: &'static str = "hopper";
-    const IMPACTS_KEY: &'static str = "hopper.cycles";
-    const MAX_IMPACTS: u64 = MAX_CYCLES as u64;
+    const LENGTH: RunLength = RunLength::Events {
+        key: "hopper.cycles",
+        max: MAX_CYCLES as u64,
+    };
     type Config = SampledHopperConfig;
     type Controller = HopController;
     type Row = SampledRow;

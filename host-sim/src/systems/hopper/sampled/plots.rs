@@ -18,8 +18,8 @@ use super::trace::SampledRow;
 use super::SampledHopperSystem;
 use crate::model::hopper::sampled::TimelineRow;
 use crate::plot::Chart;
-use crate::systems::Plots;
-use crate::verbs::Failure;
+use crate::system::Failure;
+use crate::system::Plots;
 use dexter_core::hop::StancePhase;
 use std::path::{Path, PathBuf};
 

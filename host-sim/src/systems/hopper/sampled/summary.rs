@@ -1,4 +1,4 @@
-//! The sampled hopper's summary: issue 12's keys (`cycles`, `period`,
+//! The sampled hopper's summary: its documented keys (`cycles`, `period`,
 //! `late_apex_heights_m`, `fixed_point_error`, `phase_detection_errors`), the exact-thrust
 //! orbit they are measured against, the run's health, and with `--hil` the target's
 //! figures; as text or one JSON object. Everything is a fixed-size summary of the run
@@ -12,7 +12,7 @@ use crate::model::hopper::sampled::{
 };
 use crate::model::hopper::ThrustLaw;
 use crate::output::{json_text, JsonStyle};
-use crate::systems::Outcome;
+use crate::system::Outcome;
 use serde::Serialize;
 
 /// What a sampled run produced.

@@ -35,14 +35,14 @@
 //! allow_convergent = true
 //! ```
 
-use super::execute::Noise;
-use super::geometry::{Pose, Vec2};
-use super::part::Part;
-use super::planner::{Feeder, PlanOptions};
-use super::primitives::Drive;
-use super::quasistatic::Medium;
-use super::sim::Setup;
-use super::FeederError;
+use crate::model::feeder::execute::Noise;
+use crate::model::feeder::geometry::{Pose, Vec2};
+use crate::model::feeder::part::Part;
+use crate::model::feeder::planner::{Feeder, PlanOptions};
+use crate::model::feeder::primitives::Drive;
+use crate::model::feeder::quasistatic::Medium;
+use crate::model::feeder::sim::Setup;
+use crate::model::feeder::FeederError;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};

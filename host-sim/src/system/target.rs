@@ -2,42 +2,52 @@
 //! [`StepController`] a plant steps in SIL.
 //!
 //! **This is the one place the CLI reaches the HIL driver** ([`crate::hil`]). A system
-//! names its controller kind ([`crate::systems::System::Controller`]); `--hil` starts that
+//! names its controller kind ([`crate::system::System::Controller`]); `--hil` starts that
 //! kind on the target through [`OnTarget::start`] (for every kind the protocol carries,
 //! [`Wire`]: `crate::hil::LockStep::<C>::start`), the plant steps it like the core linked
 //! in, and [`Target::finish`] stops it and returns the [`HilReport`]. A new controller kind
 //! the firmware hosts needs nothing here.
 
+use super::{Failure, NoController};
 use crate::controller::{ControllerError, HilReport, StepController};
-use crate::systems::NoController;
-use crate::verbs::Failure;
+use crate::hil::LinkKind;
 use dexter_core::fixed_rate::FixedRate;
 use dexter_core::protocol::Wire;
 use std::path::PathBuf;
 
-/// The plant link to the firmware.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum HilLink {
-    /// Semihosting file I/O (fast; the default).
-    #[default]
-    Semihosting,
-    /// The board's UART on a TCP socket (the real driver path; slow in QEMU).
-    Uart,
+/// The options of `--hil` as given on the command line (the doc comment of each field is
+/// its `--help` line; a relative `--firmware` is taken from the current directory).
+#[derive(clap::Args, Clone, Debug, Default, PartialEq)]
+pub struct HilRequest {
+    /// Firmware ELF for --hil (default: the release build in target/).
+    #[arg(long, value_name = "PATH", requires = "hil")]
+    pub firmware: Option<PathBuf>,
+    /// Plant link for --hil.
+    #[arg(long, value_enum, requires = "hil")]
+    pub link: Option<LinkKind>,
+    /// Instruction budget per control step for --hil (0 = no budget).
+    #[arg(long, value_name = "N", requires = "hil")]
+    pub budget: Option<u32>,
+    /// Fraction of host-to-device bytes corrupted for --hil, in [0, 1].
+    #[arg(long, value_name = "F", requires = "hil")]
+    pub corrupt_rate: Option<f64>,
+    /// HIL against a real board on this serial port (e.g. /dev/ttyACM0) instead of QEMU.
+    #[arg(long, value_name = "PATH", requires = "hil", conflicts_with_all = ["firmware", "link"])]
+    pub port: Option<PathBuf>,
 }
 
-/// `--hil` and its options as given on the command line.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct HilRequest {
-    /// `--firmware PATH` (relative to the current directory), else the release build.
-    pub firmware: Option<PathBuf>,
-    /// `--link`.
-    pub link: Option<HilLink>,
-    /// `--budget N` instructions per step (0 = none).
-    pub budget: Option<u32>,
-    /// `--corrupt-rate F`, in [0, 1].
-    pub corrupt_rate: Option<f64>,
-    /// `--port PATH`: a real board on this serial port instead of QEMU.
-    pub port: Option<PathBuf>,
+/// `--link semihosting|uart`: the HIL driver's own [`LinkKind`], as clap parses it.
+impl clap::ValueEnum for LinkKind {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[LinkKind::Semihosting, LinkKind::Uart]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(match self {
+            LinkKind::Semihosting => "semihosting",
+            LinkKind::Uart => "uart",
+        }))
+    }
 }
 
 /// A controller of kind `C` running on a target.
@@ -83,10 +93,7 @@ fn hil_options(req: &HilRequest) -> Result<crate::hil::HilOptions, Failure> {
             .map_err(|e| Failure::usage(format!("--firmware {}: {e}", p.display())))?;
     }
     if let Some(l) = req.link {
-        opts.link = match l {
-            HilLink::Semihosting => crate::hil::LinkKind::Semihosting,
-            HilLink::Uart => crate::hil::LinkKind::Uart,
-        };
+        opts.link = l;
     }
     if let Some(b) = req.budget {
         opts.instruction_budget = (b > 0).then_some(b).into();
