@@ -254,13 +254,17 @@ fn ring_slots(latency_s: f64, rate_hz: f64) -> usize {
 const TIME_SLACK_S: f64 = 1e-9;
 
 /// A sample is visible `latency_s` after it was taken.
+///
+/// Sequence numbers are those of the clock, which counts its samples from 0 one by one
+/// (both clocks do): the ring keeps only each sample's delivery time and values, and a
+/// sample's number is its index in the ring's stream.
 #[derive(Clone, Debug)]
 pub struct Latency<const N: usize> {
     latency_s: f64,
-    /// Samples taken and not yet delivered, (delivery time s, sample), push `j` in slot
+    /// Samples taken and not yet delivered, (delivery time s, values), push `j` in slot
     /// `j & mask`: a ring sized once for the latency (a power of two), so a push and a
     /// delivery are an index and a mask (a `VecDeque` cost ~40 instructions a step).
-    pending: Box<[(f64, Sample<N>)]>,
+    pending: Box<[(f64, [f64; N])]>,
     mask: u64,
     /// Samples pushed.
     pushed: u64,
@@ -275,13 +279,9 @@ impl<const N: usize> Latency<N> {
     /// scene never has that many).
     pub fn new(latency_s: f64, rate_hz: f64) -> Self {
         let slots = ring_slots(latency_s, rate_hz);
-        let empty = Sample {
-            seq: 0,
-            values: [0.0; N],
-        };
         Self {
             latency_s,
-            pending: vec![(0.0, empty); slots].into_boxed_slice(),
+            pending: vec![(0.0, [0.0; N]); slots].into_boxed_slice(),
             mask: slots as u64 - 1,
             pushed: 0,
             delivered: 0,
@@ -289,18 +289,27 @@ impl<const N: usize> Latency<N> {
         }
     }
 
-    fn slot(&self, index: u64) -> (f64, Sample<N>) {
-        self.pending[(index & self.mask) as usize]
+    /// Sample `index` (still in the ring).
+    #[inline]
+    fn at(&self, index: u64) -> Sample<N> {
+        Sample {
+            seq: index as u32,
+            values: self.pending[(index & self.mask) as usize].1,
+        }
     }
 }
 
 impl<const N: usize> Delay<N> for Latency<N> {
     #[inline]
     fn push(&mut self, t_s: f64, sample: Sample<N>) {
+        debug_assert_eq!(
+            sample.seq, self.pushed as u32,
+            "consecutive sequence numbers"
+        );
         if self.pushed - self.delivered > self.mask {
             self.delivered += 1; // full (never, for a validated scene): drop the oldest
         }
-        self.pending[(self.pushed & self.mask) as usize] = (t_s + self.latency_s, sample);
+        self.pending[(self.pushed & self.mask) as usize] = (t_s + self.latency_s, sample.values);
         self.pushed += 1;
     }
 
@@ -308,16 +317,19 @@ impl<const N: usize> Delay<N> for Latency<N> {
     fn latest(&mut self, t_s: f64) -> Option<Sample<N>> {
         // deliver everything due by now (with slack for the rounding of t)
         while self.delivered < self.pushed {
-            let (due, s) = self.slot(self.delivered);
+            let (due, values) = self.pending[(self.delivered & self.mask) as usize];
             if due > t_s + TIME_SLACK_S {
                 break;
             }
-            self.latest = Some(s);
+            self.latest = Some(Sample {
+                seq: self.delivered as u32,
+                values,
+            });
             self.delivered += 1;
         }
         match self.latest {
             Some(s) => Some(s),
-            None if self.delivered < self.pushed => Some(self.slot(self.delivered).1),
+            None if self.delivered < self.pushed => Some(self.at(self.delivered)),
             None => None,
         }
     }
