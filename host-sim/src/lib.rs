@@ -16,6 +16,7 @@
 //! | [`filmstrip`] | a motion as a grid of panels in one world window (arm, feeder, tilt table) |
 //! | [`stream`] | constant-memory views of a run: last values, decimated plot points |
 //! | [`progress`] | progress bars (on a terminal only) |
+//! | [`closed_loop`] | [`closed_loop::drive`]: the one fixed-rate loop, any [`closed_loop::SampledPlant`] through any controller |
 //! | [`controller`] | [`controller::StepController`]: a plant closes its loop through SIL or HIL alike |
 //! | [`external`] | `--hil`: the system's controller on the target (the one seam to [`hil`]) |
 //! | [`hil`] | the firmware in QEMU, lock-stepped with the plant |
@@ -27,6 +28,7 @@
 //! are [`systems::line`]'s modules.
 #![warn(missing_docs)]
 
+pub mod closed_loop;
 pub mod controller;
 pub mod effects;
 pub mod engine;

@@ -138,7 +138,7 @@ pub trait Outcome {
         let _ = report;
     }
     /// The controller's safe-state steps, for a system that closes its loop through one
-    /// (stepped through [`crate::controller::Counted`]): `run` warns on the terminal when
+    /// (counted by [`crate::closed_loop::drive`]): `run` warns on the terminal when
     /// there are any, and exits with status 1 when they are more than half of the steps.
     fn safe_steps(&self) -> Option<&SafeSteps> {
         None

@@ -7,7 +7,7 @@ use super::film::FilmKeeper;
 use super::summary::summarize;
 use super::trace::PlanarRow;
 use super::{PlanarConfig, PlanarOutcome};
-use crate::controller::{Counted, HilReport, SafeSteps, Sil, StepController};
+use crate::controller::{HilReport, SafeSteps, Sil, StepController};
 use crate::model::planar::impact::FrictionMode;
 use crate::model::planar::real_table::{stream_real_table, RealTable, TableRunConfig, TableSink};
 use crate::model::planar::stats::RunStats;
@@ -227,7 +227,6 @@ pub(super) fn run_real(
             &mut sil
         }
     };
-    let mut counted = Counted::new(inner);
     let run_cfg = TableRunConfig {
         model: cfg.model,
         start: cfg.start,
@@ -245,7 +244,7 @@ pub(super) fn run_real(
         },
         bar: Progress::new([(p.impacts as f64, "impacts")], setup.progress),
     };
-    let run = stream_real_table(&run_cfg, table, &mut counted, &mut streams)
+    let run = stream_real_table(&run_cfg, table, inner, &mut streams)
         .map_err(|e| Failure::run(e.to_string()))?;
     streams.bar.finish();
     let t = &run.summary;
@@ -264,7 +263,7 @@ pub(super) fn run_real(
         max_abs_x_m: t.max_abs_x_m,
         control_steps: t.control_steps,
         plan_steps: t.plan_steps,
-        safe: counted.safe.clone(),
+        safe: t.safe.clone(),
         ..figures(table)
     });
     Ok(PlanarOutcome {
