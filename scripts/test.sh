@@ -53,9 +53,7 @@ cargo fmt --all -- --check
 
 step "module layers: no import cycles, no layer imported upward (scripts/layers.py)"
 python3 scripts/layers_test.py
-# --known-ok: the cycles listed in layers.py's KNOWN (fixed on the other branches of the
-# same change) are printed but do not fail; drop it once KNOWN is empty
-python3 scripts/layers.py --known-ok
+python3 scripts/layers.py
 
 step "lints (cargo clippy -D warnings), host crates and firmware"
 cargo clippy --all-targets -- -D warnings

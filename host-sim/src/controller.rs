@@ -88,10 +88,6 @@ pub trait StepController<C: FixedRate = Controller> {
     fn command(&mut self, frame: &C::Frame) -> Result<C::Command, ControllerError> {
         self.step(frame).map(|out| out.command)
     }
-    /// HIL figures, for controllers that run on the target (None for SIL).
-    fn hil_report(&self) -> Option<HilReport> {
-        None
-    }
 }
 
 /// Software in the loop: the shared core, linked in, f32, the same code the firmware runs.
@@ -128,8 +124,9 @@ impl<C: FixedRate> StepController<C> for Sil<C> {
 }
 
 /// Control steps a controller answered in its safe state, by fault: the `safe_steps` and
-/// `faults` keys of every closed-loop system's summary (`#[serde(flatten)]` it in). Filled
-/// by [`Counted`], which every system steps its controller through.
+/// `faults` keys of every closed-loop system's summary (`#[serde(flatten)]` it in, or
+/// [`SafeSteps::every_fault`] for a summary that lists every fault code). Counted once per
+/// step by the one fixed-rate loop, [`crate::closed_loop::drive`], in SIL and HIL alike.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct SafeSteps {
     /// Control steps whose command was the safe state ([`Mode::Safe`]).
@@ -172,6 +169,17 @@ impl SafeSteps {
     fn record_safe(&mut self, fault: Fault) {
         self.safe_steps += 1;
         *self.faults.entry(fault_name(fault)).or_insert(0) += 1;
+    }
+
+    /// Steps answered in the safe state with fault `f`.
+    pub fn count(&self, f: Fault) -> u64 {
+        self.faults.get(fault_name(f)).copied().unwrap_or(0)
+    }
+
+    /// Every fault code with its count (0 for those that did not occur), for a summary
+    /// whose `faults` object lists them all.
+    pub fn every_fault(&self) -> EveryFault<'_> {
+        EveryFault(self)
     }
 
     /// True if the controller answered more than half of its steps in the safe state (the
@@ -218,42 +226,28 @@ impl SafeSteps {
     }
 }
 
-/// A controller stepped through [`SafeSteps`]: every system with a controller steps it
-/// through this, so its safe-state steps are counted the same way in SIL and HIL. `T` is
-/// the controller's type: a `dyn StepController` by default (SIL or HIL, chosen at run
-/// time), or a concrete one (e.g. [`Sil`]) for a loop monomorphized for it.
-pub struct Counted<'a, C: FixedRate, T: ?Sized + StepController<C> = dyn StepController<C> + 'a> {
-    inner: &'a mut T,
-    /// The counts so far.
-    pub safe: SafeSteps,
-    _kind: std::marker::PhantomData<C>,
-}
+/// The safe steps by every fault code, serialized as an object with one key per code in
+/// the order of [`EVERY_FAULT`] ([`SafeSteps::every_fault`]).
+#[derive(Clone, Copy, Debug)]
+pub struct EveryFault<'a>(&'a SafeSteps);
 
-impl<'a, C: FixedRate, T: ?Sized + StepController<C>> Counted<'a, C, T> {
-    /// Count the steps of `inner`.
-    pub fn new(inner: &'a mut T) -> Self {
-        Self {
-            inner,
-            safe: SafeSteps::default(),
-            _kind: std::marker::PhantomData,
+/// The fault codes a safe step can carry, in the order [`EveryFault`] lists them.
+pub const EVERY_FAULT: [Fault; 5] = [
+    Fault::NonFinite,
+    Fault::OutOfRange,
+    Fault::Stale,
+    Fault::LinkTimeout,
+    Fault::Overrun,
+];
+
+impl Serialize for EveryFault<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(EVERY_FAULT.len()))?;
+        for f in EVERY_FAULT {
+            m.serialize_entry(fault_name(f), &self.0.count(f))?;
         }
-    }
-}
-
-impl<C: FixedRate, T: ?Sized + StepController<C>> StepController<C> for Counted<'_, C, T> {
-    fn step(&mut self, frame: &C::Frame) -> Result<StepOutput<C::Command>, ControllerError> {
-        let out = self.inner.step(frame)?;
-        self.safe.record(&out.command);
-        Ok(out)
-    }
-    #[inline]
-    fn command(&mut self, frame: &C::Frame) -> Result<C::Command, ControllerError> {
-        let command = self.inner.command(frame)?;
-        self.safe.record(&command);
-        Ok(command)
-    }
-    fn hil_report(&self) -> Option<HilReport> {
-        self.inner.hil_report()
+        m.end()
     }
 }
 
@@ -286,6 +280,14 @@ mod tests {
             r#"{"safe_steps":4,"faults":{"out_of_range":3,"stale":1}}"#
         );
         assert!(s.warning().unwrap().contains("4 of 6"));
+        assert_eq!(
+            (s.count(Fault::OutOfRange), s.count(Fault::Overrun)),
+            (3, 0)
+        );
+        assert_eq!(
+            serde_json::to_string(&s.every_fault()).unwrap(),
+            r#"{"non_finite":0,"out_of_range":3,"stale":1,"link_timeout":0,"overrun":0}"#
+        );
         assert!(SafeSteps::default().warning().is_none());
     }
 }

@@ -14,8 +14,9 @@
 //! | [`systems`] | each system's scene layout, summary, trace rows, plots, sweep axes and analysis |
 //! | [`system`] | what a system is to the verbs: the [`system::System`] trait, its run length, failures and exit codes, `--hil` targets |
 //! | [`model`] | the physics of each system (line, planar, hopper, arm, feeder) and its parameters |
-//! | [`engine`] | closed-form flight, robust contact roots, impacts, Zeno, drag integrators |
-//! | [`effects`] | one module per switchable effect: actuator, sensor, jitter |
+//! | [`engine`] | closed-form flight, robust contact roots, impacts, Zeno; the one ODE engine (RK4, Dormand–Prince 5(4), events as witness functions) and its drag flight |
+//! | [`effects`] | one module per switchable effect: actuator, the one sampled sensor, jitter |
+//! | [`closed_loop`] | [`closed_loop::drive`]: the one fixed-rate loop, any [`closed_loop::SampledPlant`] through any controller |
 //! | [`hil`] | the firmware in QEMU (or a board on a serial port), lock-stepped with the plant |
 //! | [`controller`] | [`controller::StepController`]: a plant closes its loop through SIL or HIL alike |
 //! | [`scene`] | scene files read once, TOML errors with line and column, `--set`, key paths in errors |
@@ -29,6 +30,7 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod closed_loop;
 pub mod controller;
 pub mod effects;
 pub mod engine;

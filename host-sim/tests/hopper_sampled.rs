@@ -7,6 +7,7 @@
 
 use dexter_core::hop::{EnergyServoThrust, RaibertThrust};
 use dexter_core::hop_control::HopController;
+use dexter_core::fixed_rate::Fault;
 use dexter_sim::controller::{ControllerError, Sil, StepController, StepOutput};
 use dexter_sim::engine::ode::Integrator;
 use dexter_sim::model::hopper::sampled::{
@@ -56,7 +57,7 @@ fn no_detection_errors(run: &SampledRun) {
         assert_eq!(ev.events as usize, run.cycles, "{name}");
         assert_eq!((ev.missed, ev.spurious), (0, 0), "{name}: {ev:?}");
     }
-    assert_eq!(run.safe_steps, 0);
+    assert_eq!(run.safe.safe_steps, 0);
     assert_eq!(run.invalid_commands, 0);
 }
 
@@ -376,12 +377,12 @@ fn an_implausible_sensor_is_counted_as_safe_steps() {
     let run = run_sil(&c).unwrap();
     assert_eq!(run.end, SampledEnd::TimeLimit);
     assert!(
-        run.safe_steps > run.control_steps / 2,
+        run.safe.safe_steps > run.control_steps / 2,
         "{} of {}",
-        run.safe_steps,
+        run.safe.safe_steps,
         run.control_steps
     );
-    assert_eq!(run.faults.out_of_range, run.safe_steps);
+    assert_eq!(run.safe.count(Fault::OutOfRange), run.safe.safe_steps);
     assert_eq!(run.period(), None);
 }
 
@@ -640,7 +641,7 @@ fn a_sensor_at_its_own_rate_feeds_the_1khz_loop() {
         )
         .unwrap();
         let run = run_sil(&c).unwrap();
-        assert_eq!(run.safe_steps, 0);
+        assert_eq!(run.safe.safe_steps, 0);
         assert_eq!(run.period(), Some(1), "{rate} Hz: {:?}", run.settle);
         let fpe = run.fixed_point_error.unwrap();
         assert!(fpe < 0.01, "{rate} Hz: {fpe}");

@@ -98,7 +98,7 @@ fn perfect_sensing_and_drives_reproduce_the_papers_ideal_table() {
     // the controller predicts each impact to a few microseconds (measured 2e-7 s rms)
     assert!(r.predicted_impacts >= 299, "{}", r.predicted_impacts);
     assert!(r.impact_time_error_rms_s.unwrap() < 1e-5, "{r:?}");
-    assert_eq!(r.safe_steps.total(), 0);
+    assert_eq!(r.safe.safe_steps, 0);
 }
 
 #[test]
@@ -130,7 +130,7 @@ fn realistic_triangle_stays_upright_300_impacts_with_energy_within_two_percent()
         );
         assert!(s.impact_time_error_rms_s.unwrap() < 1e-3, "{s:?}");
         assert!(s.predicted_impacts >= 290);
-        assert_eq!(s.safe_steps.total(), 0);
+        assert_eq!(s.safe.safe_steps, 0);
         // every impact meets the table where it was planned: y_imp = 0 (within noise)
         for r in run.impacts.iter().skip(1) {
             assert!(
@@ -380,8 +380,8 @@ fn safe_steps_are_counted_by_fault() {
     };
     let run = run_real_table(&cfg, &table, &mut flaky).unwrap();
     let s = &run.summary;
-    assert_eq!(s.safe_steps.link_timeout, s.control_steps / 500);
-    assert!(s.safe_steps.link_timeout >= 4, "{s:?}");
+    assert_eq!(s.safe.count(Fault::LinkTimeout), s.control_steps / 500);
+    assert!(s.safe.count(Fault::LinkTimeout) >= 4, "{s:?}");
     // the recording window: one sample per control step in [0, 0.1005] s
     assert_eq!(run.samples.len(), 51);
     // a camera slower than the stale limit allows: 500 Hz control, 40 Hz camera, stale
@@ -391,7 +391,7 @@ fn safe_steps_are_counted_by_fault() {
         c.rate_hz = 40.0;
     }
     let s = run_real(&p, slow, 5).summary;
-    assert!(s.safe_steps.stale > 0, "{s:?}");
+    assert!(s.safe.count(Fault::Stale) > 0, "{s:?}");
 }
 
 #[test]

@@ -434,8 +434,4 @@ impl<C: Wire> StepController<C> for LockStep<C> {
         self.counters.time_in_steps += t0.elapsed();
         Ok(output)
     }
-
-    fn hil_report(&self) -> Option<HilReport> {
-        Some(self.counters.report())
-    }
 }

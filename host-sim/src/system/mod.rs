@@ -110,7 +110,7 @@ pub trait Outcome {
         let _ = report;
     }
     /// The controller's safe-state steps, for a system that closes its loop through one
-    /// (stepped through [`crate::controller::Counted`]): `run` warns on the terminal when
+    /// (counted by [`crate::closed_loop::drive`]): `run` warns on the terminal when
     /// there are any, and exits with status 1 when they are more than half of the steps.
     fn safe_steps(&self) -> Option<&SafeSteps> {
         None
@@ -160,10 +160,10 @@ impl FixedRate for NoController {
     fn step(&mut self, _: &()) -> Self::Command {
         match *self {}
     }
-    fn safe(&mut self, _: u32, _: dexter_core::protocol::Fault) -> Self::Command {
+    fn safe(&mut self, _: u32, _: dexter_core::fixed_rate::Fault) -> Self::Command {
         match *self {}
     }
-    fn telemetry(&self) -> dexter_core::protocol::Telemetry {
+    fn telemetry(&self) -> dexter_core::fixed_rate::Telemetry {
         match *self {}
     }
 }

@@ -12,15 +12,17 @@
 //! gains and its limits.
 
 use super::contact::Joint;
-use super::motion::ArmMotion;
+use super::motion::{ArmMotion, PlannedMotion};
 use super::planner::Plan;
 use super::simulate::{execute, Executed, GoalError};
 use super::{ArmError, ArmScene};
-use crate::controller::{Sil, StepController};
+use crate::closed_loop::{drive, SampledPlant};
+use crate::controller::{ControllerError, Sil, StepController};
 use crate::engine::ode::{fixed_steps, Rk4, State};
-use dexter_core::arm_control::{ArmController, ArmFrame};
+use dexter_core::arm_control::{ArmCommand, ArmController, ArmFrame};
 use dexter_core::fixed_rate::{Fault, Mode};
 use serde::Serialize;
+use std::ops::ControlFlow;
 
 /// RK4 substeps per control period.
 const SUBSTEPS: usize = 8;
@@ -130,6 +132,56 @@ pub struct TrackingReport {
     pub steps: usize,
 }
 
+/// The joint sampled at the controller's rate, and the tracking figures as it goes.
+struct Tracking<'a> {
+    m: TrackedMotion,
+    planned: &'a PlannedMotion,
+    dt: f64,
+    /// Largest |reference - angle| so far, rad.
+    worst: f64,
+    /// Sum of the squared tracking errors, rad^2.
+    sq: f64,
+    /// Largest |torque| commanded, N m.
+    tau_max: f64,
+    /// The first safe-state fault, and its step.
+    fault: Option<String>,
+}
+
+impl SampledPlant<ArmController> for Tracking<'_> {
+    type End = std::convert::Infallible;
+    type Error = ControllerError;
+
+    fn frame(&mut self, k: u64, _t_k: f64) -> ArmFrame {
+        let (x, v) = self.m.states[k as usize];
+        ArmFrame {
+            seq: k as u32,
+            angle_rad: x as f32,
+            velocity_radps: v as f32,
+        }
+    }
+
+    fn apply(&mut self, k: u64, t_k: f64, cmd: &ArmCommand) {
+        if cmd.mode == Mode::Safe && self.fault.is_none() && cmd.fault != Fault::None {
+            self.fault = Some(format!("{:?} at step {k}", cmd.fault));
+        }
+        let x = self.m.states[k as usize].0;
+        let err = self.planned.joint(t_k).angle_rad - x;
+        self.worst = self.worst.max(err.abs());
+        self.sq += err * err;
+        let tau = cmd.torque_nm as f64;
+        self.tau_max = self.tau_max.max(tau.abs());
+        self.m.torques_nm.push(tau);
+    }
+
+    fn advance(&mut self, k: u64, _t_next: f64) -> Result<ControlFlow<Self::End>, ControllerError> {
+        let (x, v) = self.m.states[k as usize];
+        let tau = self.m.torques_nm[k as usize];
+        let next = self.m.plant.advance(x, v, tau, self.dt, SUBSTEPS);
+        self.m.states.push(next);
+        Ok(ControlFlow::Continue(()))
+    }
+}
+
 /// Close the loop: the controller `ctl` (SIL or HIL) tracks the plan on the joint plant
 /// for the whole motion and `hold_s` after.
 pub fn track(
@@ -148,7 +200,7 @@ pub fn track(
     let planned = plan.motion(sys.bounds.brake_accel_radps2);
     // past the verifier's end (settled + hold) by a few periods
     let steps = ((planned.settled_s() + sys.task.hold_s) / dt).ceil() as usize + 5;
-    let mut m = TrackedMotion {
+    let m = TrackedMotion {
         plant,
         dt_s: dt,
         states: vec![(sys.task.initial_angle_rad, 0.0)],
@@ -156,29 +208,25 @@ pub fn track(
         release_s: planned.duration_s(),
         settled_s: planned.settled_s(),
     };
-    let (mut worst, mut sq, mut tau_max, mut fault) = (0.0f64, 0.0, 0.0f64, None);
-    for k in 0..steps {
-        let (x, v) = m.states[k];
-        let frame = ArmFrame {
-            seq: k as u32,
-            angle_rad: x as f32,
-            velocity_radps: v as f32,
-        };
-        let out = ctl
-            .step(&frame)
-            .map_err(|e| ArmError::NoPlan(format!("controller: {e}")))?;
-        let cmd = out.command;
-        if cmd.mode == Mode::Safe && fault.is_none() && cmd.fault != Fault::None {
-            fault = Some(format!("{:?} at step {k}", cmd.fault));
-        }
-        let err = planned.joint(k as f64 * dt).angle_rad - x;
-        worst = worst.max(err.abs());
-        sq += err * err;
-        let tau = cmd.torque_nm as f64;
-        tau_max = tau_max.max(tau.abs());
-        m.torques_nm.push(tau);
-        m.states.push(plant.advance(x, v, tau, dt, SUBSTEPS));
-    }
+    let mut joint = Tracking {
+        m,
+        planned: &planned,
+        dt,
+        worst: 0.0,
+        sq: 0.0,
+        tau_max: 0.0,
+        fault: None,
+    };
+    drive(ctl, &mut joint, dt, steps as u64)
+        .map_err(|e| ArmError::NoPlan(format!("controller: {e}")))?;
+    let Tracking {
+        m,
+        worst,
+        sq,
+        tau_max,
+        fault,
+        ..
+    } = joint;
     let run = execute(sys, &m, plan.mu);
     let free = super::simulate::execute_with(
         sys,

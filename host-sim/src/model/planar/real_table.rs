@@ -55,15 +55,17 @@ use super::table_run::{
     RunCounters, StepSample, SummaryBuilder, TableImpact, TableKind, TableRun, TableRunEnd,
 };
 use super::{Body, PlanarError, PlanarModel, PlanarState, TableCommand};
+use crate::closed_loop::{drive, SampledPlant};
 use crate::controller::{ControllerError, StepController};
 use crate::effects::actuator::{Actuator, IdealActuator, SecondOrderActuator};
-use dexter_core::fixed_rate::{Fault, Mode};
+use dexter_core::fixed_rate::Mode;
 use dexter_core::state::PaddleState;
 use dexter_core::tilt_control::sincos::SinCos;
 use dexter_core::tilt_control::{
     PlanStatus, TiltCommand, TiltControllerWith, TiltFrame, TiltParams,
 };
 use serde::{Deserialize, Serialize};
+use std::ops::ControlFlow;
 
 /// Most plant segments in one control period (each ends at a drive switch, a camera
 /// sample, an impact or the period's end).
@@ -559,6 +561,8 @@ struct Loop<'a, C, A, B> {
     counters: RunCounters,
     /// The controller's latest prediction of the next impact's time, s.
     prediction: Option<f64>,
+    /// The control period, s.
+    dt: f64,
 }
 
 impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
@@ -592,6 +596,7 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
             samples: Vec::new(),
             counters: RunCounters::default(),
             prediction: None,
+            dt: f64::from(table.controller.dt_s),
         }
     }
 
@@ -599,33 +604,17 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
         mut self,
         ctrl: &mut dyn StepController<TiltControllerWith<T>>,
     ) -> Result<TableRun, ControllerError> {
-        let dt = f64::from(self.table.controller.dt_s);
-        let max_steps = (self.table.max_duration_s / dt).ceil() as u64;
-        let mut end = TableRunEnd::TimeLimit;
-        for k in 0..max_steps {
-            if self.summary.impacts() >= self.cfg.impacts {
-                end = TableRunEnd::Completed;
-                break;
-            }
-            let t_k = k as f64 * dt;
-            self.take_samples(t_k);
-            let frame = self.frame(k, t_k);
-            let out = ctrl.step(&frame)?;
-            self.account(&out.command, t_k, dt);
-            self.record(t_k);
-            self.plant.command = [
-                f64::from(out.command.tilt_accel_radps2),
-                f64::from(out.command.stroke_accel_mps2),
-            ];
-            if let Err(e) = self.advance_step((k + 1) as f64 * dt) {
-                end = e;
-                break;
-            }
-        }
-        if end == TableRunEnd::TimeLimit && self.summary.impacts() >= self.cfg.impacts {
-            end = TableRunEnd::Completed;
-        }
+        let max_steps = (self.table.max_duration_s / self.dt).ceil() as u64;
+        let dt = self.dt;
+        let driven = drive(ctrl, &mut self, dt, max_steps)?;
+        let end = match driven.end {
+            Some(e) => e,
+            None if self.summary.impacts() >= self.cfg.impacts => TableRunEnd::Completed,
+            None => TableRunEnd::TimeLimit,
+        };
         self.counters.sim_time_s = self.plant.time_s;
+        self.counters.control_steps = driven.safe.steps;
+        self.counters.safe = driven.safe;
         let summary = self
             .summary
             .finish(TableKind::Real, &self.cfg.model, end, &self.counters);
@@ -633,7 +622,6 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
             summary,
             impacts: Vec::new(),
             samples: self.samples,
-            hil: ctrl.hil_report(),
         })
     }
 
@@ -647,38 +635,11 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
         }
     }
 
-    fn frame(&mut self, k: u64, t_k: f64) -> TiltFrame {
-        let p = &self.plant;
-        let (seq, z) = self.camera.frame(k, t_k, p.pose());
-        TiltFrame {
-            seq,
-            body_x_m: z[0],
-            body_y_m: z[1],
-            body_theta_rad: z[2],
-            table_angle_rad: p.tilt.height_m as f32,
-            table_rate_radps: p.tilt.velocity_mps as f32,
-            table_height_m: p.stroke.height_m as f32,
-            table_velocity_mps: p.stroke.velocity_mps as f32,
-        }
-    }
-
-    /// Count the command's mode and plan; keep its impact prediction once the controller
-    /// can have seen the last impact (camera latency plus two periods after it).
-    fn account(&mut self, cmd: &TiltCommand, t_k: f64, dt: f64) {
-        let c = &mut self.counters;
-        c.control_steps += 1;
-        if cmd.mode == Mode::Safe {
-            let s = &mut c.safe_steps;
-            match cmd.fault {
-                Fault::NonFinite => s.non_finite += 1,
-                Fault::OutOfRange => s.out_of_range += 1,
-                Fault::Stale => s.stale += 1,
-                Fault::LinkTimeout => s.link_timeout += 1,
-                Fault::Overrun => s.overrun += 1,
-                Fault::None => {}
-            }
-        }
-        let p = &mut c.plan_steps;
+    /// Count the command's plan; keep its impact prediction once the controller can have
+    /// seen the last impact (camera latency plus two periods after it).
+    fn account(&mut self, cmd: &TiltCommand, t_k: f64) {
+        let dt = self.dt;
+        let p = &mut self.counters.plan_steps;
         match cmd.plan {
             PlanStatus::Idle => p.idle += 1,
             PlanStatus::Planned => p.planned += 1,
@@ -735,6 +696,53 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
             }
         }
         Err(TableRunEnd::NoContact)
+    }
+}
+
+impl<T: SinCos, C: Camera, A: Actuator, B: Actuator> SampledPlant<TiltControllerWith<T>>
+    for Loop<'_, C, A, B>
+{
+    type End = TableRunEnd;
+    type Error = ControllerError;
+
+    fn done(&self) -> Option<TableRunEnd> {
+        (self.summary.impacts() >= self.cfg.impacts).then_some(TableRunEnd::Completed)
+    }
+
+    fn frame(&mut self, k: u64, t_k: f64) -> TiltFrame {
+        self.take_samples(t_k);
+        let p = &self.plant;
+        let (seq, z) = self.camera.frame(k, t_k, p.pose());
+        TiltFrame {
+            seq,
+            body_x_m: z[0],
+            body_y_m: z[1],
+            body_theta_rad: z[2],
+            table_angle_rad: p.tilt.height_m as f32,
+            table_rate_radps: p.tilt.velocity_mps as f32,
+            table_height_m: p.stroke.height_m as f32,
+            table_velocity_mps: p.stroke.velocity_mps as f32,
+        }
+    }
+
+    fn apply(&mut self, _k: u64, t_k: f64, command: &TiltCommand) {
+        self.account(command, t_k);
+        self.record(t_k);
+        self.plant.command = [
+            f64::from(command.tilt_accel_radps2),
+            f64::from(command.stroke_accel_mps2),
+        ];
+    }
+
+    fn advance(
+        &mut self,
+        _k: u64,
+        t_next: f64,
+    ) -> Result<ControlFlow<TableRunEnd>, ControllerError> {
+        Ok(match self.advance_step(t_next) {
+            Ok(()) => ControlFlow::Continue(()),
+            Err(e) => ControlFlow::Break(e),
+        })
     }
 }
 

@@ -7,7 +7,7 @@
 //! [`super::stats::classify`] uses).
 
 use super::{PlanarModel, PlanarRun, PlanarState, RunEnd};
-use crate::controller::HilReport;
+use crate::controller::SafeSteps;
 use serde::Serialize;
 
 /// Which table a run used.
@@ -106,28 +106,6 @@ pub struct TableImpact {
     pub grazing: bool,
 }
 
-/// Control steps answered with the safe state, by fault.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-pub struct SafeSteps {
-    /// A measurement was NaN or infinite.
-    pub non_finite: u64,
-    /// A measurement was outside its plausible range.
-    pub out_of_range: u64,
-    /// No new camera sample within the stale limit.
-    pub stale: u64,
-    /// The link timed out (HIL).
-    pub link_timeout: u64,
-    /// The control period's work overran (a board's fixed-rate loop).
-    pub overrun: u64,
-}
-
-impl SafeSteps {
-    /// All safe steps.
-    pub fn total(&self) -> u64 {
-        self.non_finite + self.out_of_range + self.stale + self.link_timeout + self.overrun
-    }
-}
-
 /// Control steps by the plan status the controller reported.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct PlanSteps {
@@ -181,8 +159,8 @@ pub struct TableSummary {
     pub impact_time_error_max_s: Option<f64>,
     /// Control steps taken (0 for the ideal table).
     pub control_steps: u64,
-    /// Safe steps by fault.
-    pub safe_steps: SafeSteps,
+    /// Steps answered in the safe state, by fault.
+    pub safe: SafeSteps,
     /// Steps by plan status.
     pub plan_steps: PlanSteps,
     /// Simulated time at the end, s.
@@ -211,17 +189,15 @@ pub struct TableRun {
     pub impacts: Vec<TableImpact>,
     /// Step samples inside the requested recording windows.
     pub samples: Vec<StepSample>,
-    /// HIL figures, if the controller ran on a target.
-    pub hil: Option<HilReport>,
 }
 
 /// Counters the run loop keeps besides the impacts.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunCounters {
     /// Control steps.
     pub control_steps: u64,
-    /// Safe steps by fault.
-    pub safe_steps: SafeSteps,
+    /// Steps answered in the safe state, by fault.
+    pub safe: SafeSteps,
     /// Steps by plan status.
     pub plan_steps: PlanSteps,
     /// Simulated time, s.
@@ -323,7 +299,7 @@ impl SummaryBuilder {
             impact_time_error_rms_s: (k > 0).then(|| (self.error_sq_sum / k as f64).sqrt()),
             impact_time_error_max_s: (k > 0).then_some(self.error_max_s),
             control_steps: counters.control_steps,
-            safe_steps: counters.safe_steps,
+            safe: counters.safe.clone(),
             plan_steps: counters.plan_steps,
             sim_time_s: counters.sim_time_s,
         }
@@ -382,6 +358,5 @@ pub fn run_ideal_table(
         summary,
         impacts: records,
         samples: Vec::new(),
-        hil: None,
     }
 }

@@ -4,7 +4,7 @@
 //! nothing (a zero-sized "off" type, not a per-step `if`).
 
 use super::loops::{free_run, stepped_run};
-use super::run::{Recorder, RunError, RunOptions};
+use super::outcome::{Recorder, RunError, RunOptions};
 use super::scene::{ActuatorKind, ControlMode, Integrator, Scene};
 use crate::controller::{Sil, StepController};
 use crate::effects::actuator::{IdealActuator, SecondOrderActuator};

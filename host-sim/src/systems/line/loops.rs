@@ -1,17 +1,20 @@
-//! The line plant's two run loops: impact to impact without a controller (table, ideal
-//! mirror), and at the controller's fixed rate with a sensor frame per step and the command
-//! held for the period.
+//! The line plant's two runs: impact to impact without a controller (table, ideal mirror),
+//! and sampled at the controller's fixed rate ([`SampledPlant`]: a sensor frame per step,
+//! the command held for the period), closed by the one fixed-rate loop, [`drive`].
 
-use super::run::{End, Recorder, RunError, RunOptions, MAX_PHASE_SAMPLES};
+use super::outcome::{End, Recorder, RunError, RunOptions, MAX_PHASE_SAMPLES};
 use super::scene::Scene;
-use crate::controller::{Counted, StepController};
+use crate::closed_loop::{drive, SampledPlant};
+use crate::controller::StepController;
 use crate::effects::jitter::Jitter;
 use crate::effects::sensor::{index_time_s, Sensor};
 use crate::engine::Flight;
 use crate::model::line::{Advance, LinePlant};
 use crate::model::surface::Surface;
 use crate::progress;
-use dexter_core::protocol::SensorFrame;
+use dexter_core::control::Controller;
+use dexter_core::protocol::{ActuatorCommand, SensorFrame};
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 /// Impacts between progress updates of an event-driven run.
@@ -152,27 +155,6 @@ fn earlier(a_s: f64, b_s: f64) -> f64 {
     }
 }
 
-/// The frame of control step `k` at `t_k_s`, after taking the samples due now.
-fn frame<F: Flight, S: Surface, J: Jitter, Z: Sensor>(
-    plant: &LinePlant<F, S, J>,
-    sensor: &mut Z,
-    k: u64,
-    t_k_s: f64,
-) -> SensorFrame {
-    // advance_period took every sample before t_k: at most the one at t_k is due
-    while sensor.next_sample_time_s() <= plant.time_s {
-        sensor.sample(plant.time_s, plant.ball.height_m);
-    }
-    let paddle = plant.surface.state(&plant.ball);
-    let (seq, z) = sensor.frame(k, t_k_s, plant.ball.height_m);
-    SensorFrame {
-        seq,
-        ball_height_m: z,
-        paddle_height_m: paddle.height_m as f32,
-        paddle_velocity_mps: paddle.velocity_mps as f32,
-    }
-}
-
 /// Sensor samples that fall within one control period of `s` (at most; 0 for a sensor
 /// that samples only at control steps).
 fn samples_per_period(s: &Scene) -> u64 {
@@ -182,11 +164,91 @@ fn samples_per_period(s: &Scene) -> u64 {
     })
 }
 
+/// The line plant sampled at the controller's rate: the plant, its sensor, and what the
+/// run records (impacts, phase samples, progress). The plant, the sensor and the progress
+/// bar are borrowed, not owned: calls take their addresses, and one of a field would keep
+/// the limits below in memory instead of registers (9 more instructions per SIL step).
+struct Sampled<'r, 'a, F, S, J, Z> {
+    plant: &'r mut LinePlant<F, S, J>,
+    sensor: &'r mut Z,
+    /// Most sensor samples in one control period ([`samples_per_period`]).
+    samples: u64,
+    /// The impact limit.
+    total: u64,
+    rec: &'r mut Recorder<'a>,
+    record_phase: bool,
+    phase_every: u64,
+    bar: &'r mut progress::Progress,
+}
+
+impl<F: Flight, S: Surface, J: Jitter, Z: Sensor> SampledPlant<Controller>
+    for Sampled<'_, '_, F, S, J, Z>
+{
+    type End = End;
+    type Error = RunError;
+
+    /// The sensor's sample-time expression, so control steps and samples coincide exactly.
+    #[inline(always)]
+    fn time_s(k: u64, dt_s: f64) -> f64 {
+        index_time_s(k, dt_s)
+    }
+
+    #[inline(always)]
+    fn done(&self) -> Option<End> {
+        (self.plant.impacts >= self.total).then_some(End::Impacts)
+    }
+
+    /// The frame of control step `k` at `t_k_s`, after taking the samples due now.
+    #[inline(always)]
+    fn frame(&mut self, k: u64, t_k_s: f64) -> SensorFrame {
+        let (plant, sensor) = (&*self.plant, &mut *self.sensor);
+        // advance_period took every sample before t_k: at most the one at t_k is due
+        while sensor.next_sample_time_s() <= plant.time_s {
+            sensor.sample(plant.time_s, plant.ball.height_m);
+        }
+        let paddle = plant.surface.state(&plant.ball);
+        let (seq, z) = sensor.frame(k, t_k_s, plant.ball.height_m);
+        SensorFrame {
+            seq,
+            ball_height_m: z,
+            paddle_height_m: paddle.height_m as f32,
+            paddle_velocity_mps: paddle.velocity_mps as f32,
+        }
+    }
+
+    #[inline(always)]
+    fn apply(&mut self, k: u64, _t_k_s: f64, command: &ActuatorCommand) {
+        self.plant
+            .surface
+            .command(f64::from(command.paddle_accel_mps2));
+        let phase = &mut self.rec.out.phase;
+        if self.record_phase
+            && k.is_multiple_of(self.phase_every)
+            && phase.len() < MAX_PHASE_SAMPLES
+        {
+            phase.push((self.plant.ball.height_m, self.plant.ball.velocity_mps));
+        }
+    }
+
+    #[inline(always)]
+    fn advance(&mut self, k: u64, t_next_s: f64) -> Result<ControlFlow<End>, RunError> {
+        let (plant, sensor) = (&mut *self.plant, &mut *self.sensor);
+        let limit = (t_next_s, self.samples);
+        if advance_period(plant, sensor, limit, self.total, self.rec)? {
+            return Ok(ControlFlow::Break(End::Impacts));
+        }
+        if k.is_multiple_of(1024) {
+            self.bar.update([plant.impacts as f64, plant.time_s]);
+        }
+        Ok(ControlFlow::Continue(()))
+    }
+}
+
 /// Fixed-rate run: a sensor frame at every control step, the command held for the period;
-/// to the impact limit or the time limit (every period is simulated whole). The
-/// controller is stepped through [`Counted`], which counts its safe-state steps; `C` is
-/// [`crate::controller::Sil`] for the core linked in (monomorphized: no dynamic call, no
-/// telemetry built) or a `dyn StepController` (the firmware in QEMU or on a board).
+/// to the impact limit or the time limit (every period is simulated whole), closed by
+/// [`drive`] (which counts the safe-state steps). `C` is [`crate::controller::Sil`] for the
+/// core linked in (monomorphized: no dynamic call, no telemetry built) or a
+/// `dyn StepController` (the firmware in QEMU or on a board).
 pub(super) fn stepped_run<F: Flight, S: Surface, J: Jitter, Z: Sensor, C>(
     s: &Scene,
     o: &RunOptions,
@@ -199,40 +261,24 @@ where
     C: StepController + ?Sized,
 {
     let start = Instant::now();
-    let mut ctrl = Counted::new(ctrl);
     let dt = 1.0 / s.control.rate_hz;
-    let total = s.stop.impacts;
     let max_steps = (s.stop.duration_s / dt).ceil() as u64;
-    let samples = samples_per_period(s);
     let mut pb = bar(o, s);
-    let phase_every = (max_steps / MAX_PHASE_SAMPLES as u64).max(1);
-    let mut end = End::Duration;
-    for k in 0..max_steps {
-        if plant.impacts >= total {
-            end = End::Impacts;
-            break;
-        }
-        let frame = frame(&plant, &mut sensor, k, index_time_s(k, dt));
-        let command = ctrl.command(&frame)?;
-        plant.surface.command(f64::from(command.paddle_accel_mps2));
-        let phase = &mut rec.out.phase;
-        if o.record_phase && k % phase_every == 0 && phase.len() < MAX_PHASE_SAMPLES {
-            phase.push((plant.ball.height_m, plant.ball.velocity_mps));
-        }
-        let t_next = index_time_s(k + 1, dt);
-        if advance_period(&mut plant, &mut sensor, (t_next, samples), total, rec)? {
-            end = End::Impacts;
-            break;
-        }
-        if k % 1024 == 0 {
-            pb.update([plant.impacts as f64, plant.time_s]);
-        }
-    }
+    let mut run = Sampled {
+        plant: &mut plant,
+        sensor: &mut sensor,
+        samples: samples_per_period(s),
+        total: s.stop.impacts,
+        rec,
+        record_phase: o.record_phase,
+        phase_every: (max_steps / MAX_PHASE_SAMPLES as u64).max(1),
+        bar: &mut pb,
+    };
+    let driven = drive(ctrl, &mut run, dt, max_steps)?;
     pb.finish();
     finish(rec, &plant, start);
-    rec.out.end = end;
-    rec.out.control_steps = ctrl.safe.steps;
-    rec.out.hil = ctrl.hil_report();
-    rec.out.safe = ctrl.safe;
+    rec.out.end = driven.end.unwrap_or(End::Duration);
+    rec.out.control_steps = driven.safe.steps;
+    rec.out.safe = driven.safe;
     Ok(())
 }

@@ -7,8 +7,10 @@
 //! | --- | --- |
 //! | [`scene`], [`validate`] | the scene schema (`docs/scenes.md`) and its checks |
 //! | [`assemble`] | the plant from the scene, only the enabled effects |
-//! | [`loops`] | the event-driven and the fixed-rate run loops |
-//! | [`run`] | the run API: options, outcome, streaming every impact |
+//! | [`loops`] | the event-driven run loop and the plant sampled at the control rate |
+//! | [`run`] | the run API: streaming every impact |
+//! | [`outcome`] | what a run records: options, errors, ends, outcome |
+//! | [`apexes`] | convergence and period of the apex sequence, in constant memory |
 //! | [`summary`] | convergence, period, resting contact; text and JSON |
 //! | [`trace`] | one CSV row per impact |
 //! | [`plots`] | apex per impact, return map, phase portrait |
@@ -16,8 +18,10 @@
 //!
 //! It runs every scene that no other system claims (the registry asks it last).
 
+pub mod apexes;
 pub mod assemble;
 pub mod loops;
+pub mod outcome;
 pub mod plots;
 pub mod run;
 pub mod scene;

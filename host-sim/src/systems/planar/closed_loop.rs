@@ -8,7 +8,7 @@ use super::film::FilmKeeper;
 use super::summary::{summarize, HilFields, RealFigures};
 use super::trace::PlanarRow;
 use super::{PlanarConfig, PlanarOutcome};
-use crate::controller::{Counted, SafeSteps, Sil, StepController};
+use crate::controller::{SafeSteps, Sil, StepController};
 use crate::model::planar::impact::FrictionMode;
 use crate::model::planar::real_table::{stream_real_table, RealTable, TableRunConfig, TableSink};
 use crate::model::planar::stats::RunStats;
@@ -109,7 +109,6 @@ pub(super) fn run_real(
             &mut sil
         }
     };
-    let mut counted = Counted::new(inner);
     let run_cfg = TableRunConfig {
         model: cfg.model,
         start: cfg.start,
@@ -127,7 +126,7 @@ pub(super) fn run_real(
         },
         bar: Progress::new([(p.impacts as f64, "impacts")], setup.progress),
     };
-    let run = stream_real_table(&run_cfg, table, &mut counted, &mut streams)
+    let run = stream_real_table(&run_cfg, table, inner, &mut streams)
         .map_err(|e| Failure::run(e.to_string()))?;
     streams.bar.finish();
     let t = &run.summary;
@@ -146,7 +145,7 @@ pub(super) fn run_real(
         max_abs_x_m: t.max_abs_x_m,
         control_steps: t.control_steps,
         plan_steps: t.plan_steps,
-        safe: counted.safe.clone(),
+        safe: t.safe.clone(),
         ..figures(table)
     });
     Ok(PlanarOutcome {

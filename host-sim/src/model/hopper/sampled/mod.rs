@@ -37,15 +37,16 @@ pub use tracker::{SampledCycle, TimelineRow};
 
 use super::valve::{PlantError, ValveModel, ValvePlant};
 use super::{HopperError, ThrustLaw};
-use crate::controller::{ControllerError, HilReport, Sil, StepController};
-use dexter_core::fixed_rate::Fault;
+use crate::closed_loop::{drive, SampledPlant};
+use crate::controller::{ControllerError, EveryFault, SafeSteps, Sil, StepController};
 use dexter_core::hop::{EnergyServoThrust, RaibertThrust, StancePhase};
-use dexter_core::hop_control::{HopController, HopParams, HopThrust};
+use dexter_core::hop_control::{HopCommand, HopController, HopFrame, HopParams, HopThrust};
 use dexter_core::params::ParamError;
 use sensor::{
     AtControlSteps, Clock, Delay, Exact, HopSensor, Latency, Measure, NoLatency, Periodic, Truth,
 };
 use serde::Serialize;
+use std::ops::ControlFlow;
 use tracker::Tracker;
 
 /// Most control steps one run may take (`hopper.control.max_time_s` x rate).
@@ -463,21 +464,6 @@ impl From<PlantError> for SampledEnd {
     }
 }
 
-/// Safe-state steps by fault code.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-pub struct FaultCounts {
-    /// [`Fault::NonFinite`].
-    pub non_finite: u64,
-    /// [`Fault::OutOfRange`].
-    pub out_of_range: u64,
-    /// [`Fault::Stale`].
-    pub stale: u64,
-    /// [`Fault::LinkTimeout`].
-    pub link_timeout: u64,
-    /// [`Fault::Overrun`] (a board's fixed-rate loop).
-    pub overrun: u64,
-}
-
 /// Everything a sampled run produced.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SampledRun {
@@ -497,10 +483,8 @@ pub struct SampledRun {
     pub phase_detection_errors: PhaseDetectionErrors,
     /// Control steps taken.
     pub control_steps: u64,
-    /// Steps answered with the safe command.
-    pub safe_steps: u64,
-    /// Safe steps by fault code.
-    pub faults: FaultCounts,
+    /// Steps answered with the safe command, by fault.
+    pub safe: SafeSteps,
     /// Commands with an open valve and a thrust that is not finite or outside
     /// [0, the law's maximum] (the plant closed the valve instead).
     pub invalid_commands: u64,
@@ -516,8 +500,6 @@ pub struct SampledRun {
     pub records: Vec<SampledCycle>,
     /// Timeline rows (if asked for).
     pub timeline: Vec<TimelineRow>,
-    /// HIL figures, if the controller ran on a target.
-    pub hil: Option<HilReport>,
 }
 
 impl SampledRun {
@@ -538,8 +520,8 @@ impl SampledRun {
             settle: &self.settle,
             end: self.end,
             control_steps: self.control_steps,
-            safe_steps: self.safe_steps,
-            faults: &self.faults,
+            safe_steps: self.safe.safe_steps,
+            faults: self.safe.every_fault(),
             invalid_commands: self.invalid_commands,
             early_liftoffs: self.early_liftoffs,
             sim_time_s: self.sim_time_s,
@@ -571,8 +553,8 @@ pub struct SampledSummary<'a> {
     pub control_steps: u64,
     /// Safe-state steps.
     pub safe_steps: u64,
-    /// Safe steps by fault.
-    pub faults: &'a FaultCounts,
+    /// Safe steps by fault (every fault code, 0 for those that did not occur).
+    pub faults: EveryFault<'a>,
     /// Rejected commands.
     pub invalid_commands: u64,
     /// Liftoffs during the thrust.
@@ -663,110 +645,112 @@ fn true_phase(plant: &ValvePlant) -> StancePhase {
     }
 }
 
-/// The fixed-rate loop.
+/// The hopper sampled at the controller's rate: the plant, its sensor, the run's records.
+struct Sampled<'a, C, M, D> {
+    cfg: &'a SampledConfig,
+    plant: ValvePlant,
+    sensor: HopSensor<C, M, D>,
+    tr: Tracker<'a>,
+    /// Largest valid thrust, m/s^2.
+    max_thrust: f64,
+    /// The truth and true phase at the current step, and the measured compression (m) its
+    /// frame carries.
+    at_step: (Truth, StancePhase, Option<f64>),
+    invalid_commands: u64,
+}
+
+impl<C: Clock, M: Measure<3>, D: Delay<3>> SampledPlant<HopController> for Sampled<'_, C, M, D> {
+    type End = SampledEnd;
+    type Error = SampledError;
+
+    fn done(&self) -> Option<SampledEnd> {
+        (self.tr.completed() >= self.cfg.cycles).then_some(SampledEnd::Completed)
+    }
+
+    fn frame(&mut self, _k: u64, t_k: f64) -> HopFrame {
+        // samples due now are taken before the frame is formed
+        for _ in 0..64 {
+            if self.sensor.next_sample_time_s() > t_k + TIME_SLACK_S {
+                break;
+            }
+            self.sensor.sample(t_k, truth(&self.plant));
+        }
+        let truth_k = truth(&self.plant);
+        let phase_k = true_phase(&self.plant);
+        let (frame, measured) = self.sensor.frame(t_k, truth_k);
+        self.at_step = (truth_k, phase_k, measured.map(|m| m.compression_m));
+        frame
+    }
+
+    fn apply(&mut self, _k: u64, t_k: f64, cmd: &HopCommand) {
+        let valid = cmd.thrust_mps2.is_finite()
+            && f64::from(cmd.thrust_mps2) >= 0.0
+            && f64::from(cmd.thrust_mps2) <= self.max_thrust;
+        if cmd.valve_open && !valid {
+            self.invalid_commands += 1;
+        }
+        let open = cmd.valve_open && valid;
+        let (truth_k, phase_k, measured) = self.at_step;
+        self.tr
+            .on_command(t_k, cmd, open, truth_k, phase_k, measured);
+        self.plant.set_valve(open, f64::from(cmd.thrust_mps2));
+    }
+
+    fn advance(&mut self, _k: u64, t_next: f64) -> Result<ControlFlow<SampledEnd>, SampledError> {
+        let tr = &mut self.tr;
+        // the sensor's own samples between the steps: the plant stops at each
+        for _ in 0..64 {
+            let ts = self.sensor.next_sample_time_s();
+            if ts >= t_next - TIME_SLACK_S {
+                break;
+            }
+            if let Err(e) = self.plant.advance_to(ts, &mut |e| tr.on_event(e)) {
+                return Ok(ControlFlow::Break(e.into()));
+            }
+            self.sensor.sample(ts, truth(&self.plant));
+        }
+        Ok(
+            match self.plant.advance_to(t_next, &mut |e| tr.on_event(e)) {
+                Err(e) => ControlFlow::Break(e.into()),
+                Ok(()) => ControlFlow::Continue(()),
+            },
+        )
+    }
+}
+
+/// The fixed-rate run, closed by [`drive`].
 fn stepped<C: Clock, M: Measure<3>, D: Delay<3>>(
     cfg: &SampledConfig,
     ctrl: &mut dyn StepController<HopController>,
     sink: Sink<'_>,
-    mut sensor: HopSensor<C, M, D>,
+    sensor: HopSensor<C, M, D>,
 ) -> Result<SampledRun, SampledError> {
-    let dt = cfg.dt_s();
-    let max_thrust = f64::from(cfg.control.thrust.max_thrust_mps2());
-    let mut plant = ValvePlant::new(cfg.model, cfg.start_height_m, 0.0);
-    let mut tr = Tracker::new(cfg, sink);
-    let mut out = Counters::default();
-    let mut end = SampledEnd::TimeLimit;
-    'steps: for k in 0..cfg.max_steps() {
-        if tr.completed() >= cfg.cycles {
-            end = SampledEnd::Completed;
-            break;
-        }
-        let t_k = k as f64 * dt;
-        // samples due now are taken before the frame is formed
-        for _ in 0..64 {
-            if sensor.next_sample_time_s() > t_k + TIME_SLACK_S {
-                break;
-            }
-            sensor.sample(t_k, truth(&plant));
-        }
-        let truth_k = truth(&plant);
-        let phase_k = true_phase(&plant);
-        let (frame, measured) = sensor.frame(t_k, truth_k);
-        let cmd = ctrl.step(&frame)?.command;
-        out.count(&cmd);
-        let valid = cmd.thrust_mps2.is_finite()
-            && f64::from(cmd.thrust_mps2) >= 0.0
-            && f64::from(cmd.thrust_mps2) <= max_thrust;
-        if cmd.valve_open && !valid {
-            out.invalid_commands += 1;
-        }
-        let open = cmd.valve_open && valid;
-        tr.on_command(
-            t_k,
-            &cmd,
-            open,
-            truth_k,
-            phase_k,
-            measured.map(|m| m.compression_m),
-        );
-        plant.set_valve(open, f64::from(cmd.thrust_mps2));
-        let t_next = (k + 1) as f64 * dt;
-        // the sensor's own samples between the steps: the plant stops at each
-        for _ in 0..64 {
-            let ts = sensor.next_sample_time_s();
-            if ts >= t_next - TIME_SLACK_S {
-                break;
-            }
-            if let Err(e) = plant.advance_to(ts, &mut |e| tr.on_event(e)) {
-                end = e.into();
-                break 'steps;
-            }
-            sensor.sample(ts, truth(&plant));
-        }
-        if let Err(e) = plant.advance_to(t_next, &mut |e| tr.on_event(e)) {
-            end = e.into();
-            break;
-        }
-    }
-    if end == SampledEnd::TimeLimit && tr.completed() >= cfg.cycles {
-        end = SampledEnd::Completed;
-    }
-    finish(cfg, tr, out, end, &plant, ctrl.hil_report())
+    let plant = ValvePlant::new(cfg.model, cfg.start_height_m, 0.0);
+    let mut run = Sampled {
+        cfg,
+        at_step: (truth(&plant), true_phase(&plant), None),
+        plant,
+        sensor,
+        tr: Tracker::new(cfg, sink),
+        max_thrust: f64::from(cfg.control.thrust.max_thrust_mps2()),
+        invalid_commands: 0,
+    };
+    let driven = drive(ctrl, &mut run, cfg.dt_s(), cfg.max_steps())?;
+    let end = match driven.end {
+        Some(e) => e,
+        None if run.tr.completed() >= cfg.cycles => SampledEnd::Completed,
+        None => SampledEnd::TimeLimit,
+    };
+    finish(cfg, run, driven.safe, end)
 }
 
-/// Per-step counts.
-#[derive(Clone, Copy, Debug, Default)]
-struct Counters {
-    steps: u64,
-    safe_steps: u64,
-    faults: FaultCounts,
-    invalid_commands: u64,
-}
-
-impl Counters {
-    fn count(&mut self, cmd: &dexter_core::hop_control::HopCommand) {
-        self.steps += 1;
-        let f = &mut self.faults;
-        match cmd.fault {
-            Fault::None => return,
-            Fault::NonFinite => f.non_finite += 1,
-            Fault::OutOfRange => f.out_of_range += 1,
-            Fault::Stale => f.stale += 1,
-            Fault::LinkTimeout => f.link_timeout += 1,
-            Fault::Overrun => f.overrun += 1,
-        }
-        self.safe_steps += 1;
-    }
-}
-
-fn finish(
+fn finish<C, M, D>(
     cfg: &SampledConfig,
-    tr: Tracker<'_>,
-    c: Counters,
+    run: Sampled<'_, C, M, D>,
+    safe: SafeSteps,
     end: SampledEnd,
-    plant: &ValvePlant,
-    hil: Option<HilReport>,
 ) -> Result<SampledRun, SampledError> {
+    let (tr, plant) = (run.tr, &run.plant);
     let recent = tr.recent_hop_heights();
     let settle = settled_period(&recent, cfg.settle_tolerance);
     let exact = if cfg.compare_exact {
@@ -787,17 +771,15 @@ fn finish(
         exact,
         fixed_point_error,
         phase_detection_errors: parts.errors,
-        control_steps: c.steps,
-        safe_steps: c.safe_steps,
-        faults: c.faults,
-        invalid_commands: c.invalid_commands,
+        control_steps: safe.steps,
+        safe,
+        invalid_commands: run.invalid_commands,
         early_liftoffs: parts.early_liftoffs,
         sim_time_s: plant.state().time_s,
         end,
         integrator_steps: plant.integrator_steps(),
         records: parts.records,
         timeline: parts.timeline,
-        hil,
     })
 }
 

@@ -22,7 +22,7 @@ pub mod trace;
 use self::scene::{has_control, scene_error, SampledHopperConfig};
 use self::summary::SampledOutcome;
 use self::trace::SampledRow;
-use crate::controller::{Counted, Sil, StepController};
+use crate::controller::{Sil, StepController};
 use crate::model::hopper::sampled::{run_sampled_with, SampledError, MAX_CYCLES};
 use crate::progress::Progress;
 use crate::scene::{SceneError, SceneFile};
@@ -77,10 +77,9 @@ impl System for SampledHopperSystem {
                 &mut sil
             }
         };
-        let mut counted = Counted::new(inner);
         let mut bar = Progress::new([(sampled.cycles as f64, "cycles")], setup.progress);
         let wall = Instant::now();
-        let run = run_sampled_with(&sampled, &mut counted, &mut |c| {
+        let run = run_sampled_with(&sampled, inner, &mut |c| {
             rows(&SampledRow(*c));
             if c.index % 16 == 0 {
                 bar.update([c.index as f64]);
@@ -88,13 +87,7 @@ impl System for SampledHopperSystem {
         })
         .map_err(failure)?;
         bar.finish();
-        let safe = counted.safe;
-        Ok(SampledOutcome::new(
-            cfg,
-            run,
-            safe,
-            wall.elapsed().as_secs_f64(),
-        ))
+        Ok(SampledOutcome::new(cfg, run, wall.elapsed().as_secs_f64()))
     }
 }
 

@@ -34,8 +34,6 @@ pub struct SampledOutcome {
     pub target_hop_height_m: Option<f64>,
     /// The run.
     pub run: SampledRun,
-    /// Safe-state steps as counted through [`crate::controller::Counted`].
-    pub safe: SafeSteps,
     /// Wall-clock time of the run, s.
     pub wall_time_s: f64,
     /// The target's figures (`--hil`).
@@ -61,7 +59,7 @@ struct Json<'a> {
 
 impl SampledOutcome {
     /// The outcome of `run` for the scene `cfg`.
-    pub fn new(cfg: &SampledHopperConfig, run: SampledRun, safe: SafeSteps, wall_s: f64) -> Self {
+    pub fn new(cfg: &SampledHopperConfig, run: SampledRun, wall_s: f64) -> Self {
         let p = &cfg.hopper.params;
         let (thrust_law, thrust_text, target) = match &cfg.hopper.hopper.law {
             ThrustLaw::Raibert(r) => (
@@ -95,7 +93,6 @@ impl SampledOutcome {
             control_rate_hz: cfg.control.rate_hz,
             target_hop_height_m: target,
             run,
-            safe,
             wall_time_s: wall_s,
             hil: None,
         }
@@ -226,7 +223,7 @@ impl Outcome for SampledOutcome {
         s += &self.detection_lines();
         s += &format!("ended            {}\n", self.end_text());
         s += &format!("control steps    {}\n", r.control_steps);
-        s += &self.safe.text();
+        s += &r.safe.text();
         if r.invalid_commands > 0 || r.early_liftoffs > 0 {
             s += &format!(
                 "warnings         {} invalid commands, {} liftoffs with the valve open\n",
@@ -262,7 +259,7 @@ impl Outcome for SampledOutcome {
     }
 
     fn safe_steps(&self) -> Option<&SafeSteps> {
-        Some(&self.safe)
+        Some(&self.run.safe)
     }
 
     fn shortfall(&self) -> Option<String> {
