@@ -5,9 +5,9 @@
 //! Expected values come from eq. 17, the exact event-driven simulator, or hand bounds on the
 //! valve timing; never from the sampled loop itself.
 
+use dexter_core::fixed_rate::Fault;
 use dexter_core::hop::{EnergyServoThrust, RaibertThrust};
 use dexter_core::hop_control::HopController;
-use dexter_core::fixed_rate::Fault;
 use dexter_sim::controller::{ControllerError, Sil, StepController, StepOutput};
 use dexter_sim::engine::ode::Integrator;
 use dexter_sim::model::hopper::sampled::{
