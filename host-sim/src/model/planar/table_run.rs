@@ -1,7 +1,7 @@
 //! What a run of the planar body on a table produced, the same for the paper's ideal table
 //! and for the real one ([`super::real_table`]), so the two compare key for key.
 //!
-//! The figures issue 11 asks for: `impacts`, `tipped_over`, `late_theta_max_rad`,
+//! The figures a balancing run is judged by: `impacts`, `tipped_over`, `late_theta_max_rad`,
 //! `late_energy_error` (relative to eta*), the impact-time prediction error and the safe
 //! steps by fault. The **late window** is the last quarter of the impacts (as
 //! [`super::stats::classify`] uses).

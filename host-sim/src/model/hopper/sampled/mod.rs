@@ -1,7 +1,7 @@
 //! The hopper closed through a fixed-rate controller: the valve-driven plant
 //! ([`super::valve`]), a sensor with rate, noise, quantization and latency ([`sensor`]), and
 //! the core's [`HopController`] behind a [`StepController`] (the core linked in, [`Sil`], or
-//! the firmware in QEMU, HIL). Issue 12.
+//! the firmware in QEMU, HIL), so a thrust timing can be checked at the rate a board runs it.
 //!
 //! One control step at t_k = k dt: the samples due are taken, the frame (the newest
 //! delivered sample) goes to the controller, its command sets the valve for
@@ -508,7 +508,8 @@ impl SampledRun {
         self.settle.period
     }
 
-    /// The JSON keys of issue 12 and the run's health.
+    /// The JSON summary: the settled period, its distance from the exact orbit, phase
+    /// detection and the run's health.
     pub fn summary(&self) -> SampledSummary<'_> {
         SampledSummary {
             cycles: self.cycles,

@@ -136,7 +136,8 @@ pub struct Settle {
 }
 
 /// The settled period of the last `2 SETTLE_WINDOW` values, honest about convergence
-/// (issue 10 item 7): the smallest p <= [`MAX_SETTLE_PERIOD`] such that
+/// (a period is reported only once the orbit provably settled to it): the smallest
+/// p <= [`MAX_SETTLE_PERIOD`] such that
 ///
 /// 1. every phase of the orbit (the values i = j mod p, over both windows) stays within
 ///    `tol` of the mean value (max - min <= tol |mean|), so nothing drifted by more than the
