@@ -526,6 +526,19 @@ mod tests {
     }
 
     #[test]
+    fn before_the_first_delivery_the_frame_carries_the_oldest_sample() {
+        let mut s = SampledSensor::new(100.0, 0.0, 0.02, 0.0, 1);
+        let (seq, z) = s.frame(0, 0.0, 0.5);
+        assert!(seq == 0 && z.is_nan(), "nothing taken yet: no value");
+        s.sample(0.0, 0.25);
+        s.sample(0.01, 0.75);
+        // neither is due (0.02, 0.03) at 0.015: the frame repeats sample 0, not the truth
+        assert_eq!(s.frame(1, 0.015, 0.5), (0, 0.25));
+        assert_eq!(s.frame(2, 0.02, 0.5), (0, 0.25));
+        assert_eq!(s.frame(3, 0.03, 0.5), (1, 0.75));
+    }
+
+    #[test]
     fn the_perfect_sensor_is_the_truth_now_and_costs_nothing() {
         let mut s = PerfectSensor::default();
         assert_eq!(s.next_sample_time_s(), f64::INFINITY);

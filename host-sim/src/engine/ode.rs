@@ -511,6 +511,44 @@ mod tests {
     }
 
     #[test]
+    fn a_witness_that_reaches_zero_at_a_step_end_fires_there() {
+        // witnesses fire at >= 0: t - 0.25 is exactly 0 at the end of the second 0.125 s
+        // step, so the event is that step's end, with no bisection past it
+        let ode = Ode {
+            method: Rk4,
+            tolerance: 0.0,
+            max_steps: 1000,
+        };
+        let clock = |t: f64, _: State| t - 0.25;
+        let one = |t: f64, _: State| t - 0.25;
+        for end in [
+            ode.integrate(
+                &mut 0.125,
+                &|_, _| 0.0,
+                (0.0, 0.0),
+                1.0,
+                &[&clock as &dyn Fn(f64, State) -> f64][..],
+                &mut |_, _| {},
+            )
+            .0,
+            ode.integrate(
+                &mut 0.125,
+                &|_, _| 0.0,
+                (0.0, 0.0),
+                1.0,
+                &Witness(one),
+                &mut |_, _| {},
+            )
+            .0,
+        ] {
+            let End::Event { dt_s, .. } = end else {
+                panic!("{end:?}")
+            };
+            assert_eq!(dt_s, 0.25);
+        }
+    }
+
+    #[test]
     fn the_span_is_ended_exactly_and_the_cap_holds() {
         let ode = Ode {
             method: Rk4,
