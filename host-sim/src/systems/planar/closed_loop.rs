@@ -131,7 +131,7 @@ pub(super) fn run_real(
     streams.bar.finish();
     let t = &run.summary;
     let done = Streamed {
-        end: t.end.into(),
+        end: t.end,
         impacts: t.impacts,
         gap_evaluations: 0,
     };
