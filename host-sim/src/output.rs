@@ -438,6 +438,17 @@ impl fmt::Display for Sig17 {
     }
 }
 
+/// What ends the command when a streamed trace's reader has gone ([`on_broken_pipe`]).
+static BROKEN_PIPE: std::sync::OnceLock<fn(&Path) -> !> = std::sync::OnceLock::new();
+
+/// Have `stop` end the command as soon as a trace written to a pipe (stdout, a FIFO) finds
+/// its reader gone, instead of running to the end for nobody (`dexter run ... --trace - |
+/// head`). The CLI sets it (clean up, exit 141); a library caller gets the error from
+/// [`TraceFile::commit`].
+pub fn on_broken_pipe(stop: fn(&Path) -> !) {
+    let _ = BROKEN_PIPE.set(stop);
+}
+
 /// One row of a system's `--trace` CSV.
 pub trait TraceRow {
     /// The CSV header, column names in order.
@@ -461,10 +472,16 @@ impl TraceFile {
         Ok(Self { file, error: None })
     }
 
-    /// Append a row (the first write error is kept and reported by [`TraceFile::commit`]).
+    /// Append a row (the first write error is kept and reported by [`TraceFile::commit`];
+    /// a closed pipe ends the command at once if the CLI said how: [`on_broken_pipe`]).
     pub fn push<R: TraceRow>(&mut self, row: &R) {
         if self.error.is_none() {
             if let Err(e) = row.write_csv(self.file.writer()) {
+                if e.kind() == std::io::ErrorKind::BrokenPipe {
+                    if let Some(stop) = BROKEN_PIPE.get() {
+                        stop(self.file.path());
+                    }
+                }
                 self.error = Some(e);
             }
         }

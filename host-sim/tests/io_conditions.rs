@@ -279,6 +279,18 @@ fn a_closed_stdout_ends_quietly_with_141() {
     }
 }
 
+/// A trace streamed to a closed stdout ends the run at once, not after 10⁸ impacts.
+#[test]
+fn a_long_trace_to_a_closed_stdout_stops_at_once() {
+    let t0 = Instant::now();
+    let sc = short_scene();
+    let out = with_closed_stdout(&["run", &sc, "--impacts", "100000000", "--trace", "-"]);
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(141), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stderr), "");
+    assert!(t0.elapsed() < Duration::from_secs(60), "{:?}", t0.elapsed());
+}
+
 #[test]
 fn a_closed_stderr_does_not_change_the_exit_status() {
     let bad = scratch("io-bad-scene").join("bad.toml");

@@ -7,6 +7,9 @@
 //! prints one line on stderr saying what was interrupted and exits with 128 + the signal's
 //! number: 130 (SIGINT), 143 (SIGTERM), 129 (SIGHUP). Every previous output file is left as
 //! it was; an output written directly (a device, a FIFO, stdout) keeps what was written.
+//!
+//! A trace streamed to a pipe whose reader has gone ends the command the same way, with
+//! exit 141 ([`broken_pipe`]).
 
 use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
@@ -18,6 +21,7 @@ const HANDLED: [(i32, &str); 3] = [(SIGINT, "SIGINT"), (SIGTERM, "SIGTERM"), (SI
 /// scenes/line-juggler.toml`). If the handler cannot be installed, the signals keep their
 /// default action (the command is killed) and a warning says so.
 pub fn install(what: String) {
+    crate::output::on_broken_pipe(broken_pipe);
     let signals = match Signals::new(HANDLED.map(|(s, _)| s)) {
         Ok(s) => s,
         Err(e) => {
@@ -39,6 +43,20 @@ pub fn install(what: String) {
     if let Err(e) = spawned {
         crate::output::note(format_args!("warning: cannot handle signals ({e})"));
     }
+}
+
+/// A streamed output's reader has gone (EPIPE): clean up as for a signal and exit 141,
+/// quietly if it was stdout ([`crate::output::on_broken_pipe`]).
+pub fn broken_pipe(path: &std::path::Path) -> ! {
+    crate::output::remove_unfinished();
+    crate::hil::kill_all();
+    if path != std::path::Path::new(crate::output::STDOUT) {
+        crate::output::note(format_args!(
+            "error: cannot write {}: the pipe's reader has gone",
+            path.display()
+        ));
+    }
+    std::process::exit(i32::from(crate::system::EXIT_BROKEN_PIPE))
 }
 
 /// Clean up after `signo` and exit with 128 + `signo`.
