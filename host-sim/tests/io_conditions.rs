@@ -353,6 +353,15 @@ fn a_full_stdout_or_stderr_exits_1_or_keeps_its_status() {
         err.contains("stdout") && err.contains("No space left"),
         "{err}"
     );
+    // ... and a trace is not written when the summary cannot be printed
+    let trace = dir.join("t.csv");
+    std::fs::write(&trace, "old\n").unwrap();
+    let mut targs = args.clone();
+    targs.extend(["--trace", trace.to_str().unwrap()]);
+    let out = run_dexter(&targs, Stdio::from(open()), Stdio::piped());
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert_eq!(std::fs::read_to_string(&trace).unwrap(), "old\n");
+    std::fs::remove_file(&trace).unwrap();
     // a full stderr: a bad scene still exits 2, a good run 0
     let bad = dir.join("bad.toml");
     std::fs::write(&bad, "[physics\n").unwrap();

@@ -42,24 +42,26 @@ pub fn run<S: System>(file: &SceneFile, req: &RunRequest) -> Result<(), Failure>
         Some(h) => run_on_target::<S>(&cfg, h, &setup, rows)?,
     };
     let (warning, verdict) = verdict(&outcome);
+    let batch = Batch::begin();
+    let mut written = Vec::new();
     if verdict.is_ok() {
-        let batch = Batch::begin();
         if let Some(t) = trace {
-            t.commit()?;
+            t.commit()?; // held back by the batch
         }
-        let written = match (plots, &req.plot) {
-            (Some(p), Some(dir)) => p.write(&cfg, &outcome, dir)?,
-            _ => Vec::new(),
-        };
-        batch.commit()?;
-        for f in written {
-            note(format_args!("wrote {}", f.display()));
+        if let (Some(p), Some(dir)) = (plots, &req.plot) {
+            written = p.write(&cfg, &outcome, dir)?;
         }
     } else if trace.is_some() || plots.is_some() {
         drop(trace); // its temporary file is removed: the old trace stays
         note(not_written(req));
     }
+    // the summary before the renames: a run whose summary cannot be printed (a full
+    // stdout) fails, and writes nothing
     print_result(req.json, || outcome.text(), || outcome.json())?;
+    batch.commit()?;
+    for f in written {
+        note(format_args!("wrote {}", f.display()));
+    }
     if let Some(w) = warning {
         note(format_args!("warning: {w}"));
     }

@@ -94,11 +94,13 @@ pub fn sweep<S: Sweeps>(file: &SceneFile, req: &SweepRequest) -> Result<(), Fail
         Some(dir) => report.plot(dir)?,
         None => Vec::new(),
     };
-    batch.commit()?;
+    // the summary before the renames: a sweep whose summary cannot be printed fails, and
+    // writes nothing
     match csv_file {
         Some(_) => print_stdout(&summary)?,
         None => print_stderr(&summary),
     }
+    batch.commit()?;
     for f in written {
         note(format_args!("wrote {}", f.display()));
     }
