@@ -35,6 +35,9 @@ pub enum RunError {
     /// The plant stopped advancing before the run's end (an internal cap was hit: the run
     /// fails rather than end early).
     Stalled(String),
+    /// An impact left the ball slower than the paddle (the jitter made the restitution
+    /// law's command unphysical): the run cannot go on.
+    Unphysical(String),
 }
 
 impl std::fmt::Display for RunError {
@@ -43,6 +46,7 @@ impl std::fmt::Display for RunError {
             RunError::Scene(e) => write!(f, "scene error: {e}"),
             RunError::Controller(e) => write!(f, "{e}"),
             RunError::Stalled(e) => write!(f, "the simulation stalled: {e}"),
+            RunError::Unphysical(e) => write!(f, "unphysical impact: {e}"),
         }
     }
 }
