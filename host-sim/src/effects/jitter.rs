@@ -7,6 +7,17 @@
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 
+/// An impact the jitter made unphysical: the ball left slower than the surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unphysical {
+    /// When, s.
+    pub time_s: f64,
+    /// The ball's velocity the law gave, m/s.
+    pub ball_velocity_mps: f64,
+    /// The surface's velocity at the contact, m/s.
+    pub surface_velocity_mps: f64,
+}
+
 /// A source of impact-time offsets.
 pub trait Jitter {
     /// False for [`NoJitter`]: an impact's command is then the surface's own, and what
@@ -14,6 +25,15 @@ pub trait Jitter {
     const ON: bool = true;
     /// The offset of the next impact, s.
     fn offset_s(&mut self) -> f64;
+    /// Note an impact whose jittered command was unphysical (kept by a jitter that is on,
+    /// so a plant without jitter carries nothing for it).
+    fn note_unphysical(&mut self, u: Unphysical) {
+        let _ = u;
+    }
+    /// The unphysical impact noted, if any.
+    fn unphysical(&self) -> Option<Unphysical> {
+        None
+    }
 }
 
 /// No jitter: every offset is zero.
@@ -32,6 +52,7 @@ impl Jitter for NoJitter {
 #[derive(Clone, Debug)]
 pub struct GaussianJitter {
     sigma_s: f64,
+    unphysical: Option<Unphysical>,
     normal: Normal<f64>,
     rng: rand::rngs::StdRng,
 }
@@ -41,6 +62,7 @@ impl GaussianJitter {
     pub fn new(sigma_s: f64, seed: u64) -> Self {
         Self {
             sigma_s,
+            unphysical: None,
             normal: Normal::new(0.0, sigma_s.max(0.0))
                 .unwrap_or_else(|_| Normal::new(0.0, 0.0).expect("sigma 0 is valid")),
             rng: rand::rngs::StdRng::seed_from_u64(seed),
@@ -52,6 +74,12 @@ impl Jitter for GaussianJitter {
     fn offset_s(&mut self) -> f64 {
         let d = self.normal.sample(&mut self.rng);
         d.clamp(-4.0 * self.sigma_s, 4.0 * self.sigma_s)
+    }
+    fn note_unphysical(&mut self, u: Unphysical) {
+        self.unphysical.get_or_insert(u);
+    }
+    fn unphysical(&self) -> Option<Unphysical> {
+        self.unphysical
     }
 }
 

@@ -65,7 +65,11 @@ pub(super) fn free_run<F: Flight, S: Surface, J: Jitter>(
     let end = loop {
         let goal = (plant.impacts + CHUNK_IMPACTS).min(total);
         let before = (plant.impacts, plant.time_s);
-        match plant.advance_to(s.stop.duration_s, goal, &mut |r| rec.push(r)) {
+        let advance = plant.advance_to(s.stop.duration_s, goal, &mut |r| rec.push(r));
+        if J::ON && plant.jitter.unphysical().is_some() {
+            return Err(unphysical(&plant));
+        }
+        match advance {
             Advance::ImpactLimit if plant.impacts >= total => break End::Impacts,
             Advance::ImpactLimit => {}
             Advance::SegmentCap if (plant.impacts, plant.time_s) == before => {
@@ -74,7 +78,6 @@ pub(super) fn free_run<F: Flight, S: Surface, J: Jitter>(
             Advance::SegmentCap => {}
             Advance::RestForever => break End::Resting,
             Advance::Reached => break End::Duration,
-            Advance::Unphysical => return Err(unphysical(&plant)),
         }
         pb.update([plant.impacts as f64, plant.time_s]);
     };
@@ -94,11 +97,11 @@ fn stalled<F: Flight, S: Surface, J: Jitter>(plant: &LinePlant<F, S, J>, why: &s
 
 /// The error of a plant whose last impact the jitter made unphysical.
 fn unphysical<F: Flight, S: Surface, J: Jitter>(plant: &LinePlant<F, S, J>) -> RunError {
-    let what = match plant.unphysical {
+    let what = match plant.jitter.unphysical() {
         Some(u) => format!(
-            "at t = {:.6} s (impact {}) the ball would leave at {:.4} m/s, slower than the \
-             paddle at {:.4} m/s, so it would pass into it",
-            u.time_s, plant.impacts, u.ball_velocity_mps, u.surface_velocity_mps
+            "at t = {:.6} s the ball would leave at {:.4} m/s, slower than the paddle at \
+             {:.4} m/s, so it would pass into it",
+            u.time_s, u.ball_velocity_mps, u.surface_velocity_mps
         ),
         None => format!(
             "at t = {} s the ball would pass into the paddle",
@@ -125,9 +128,12 @@ fn advance_stretch<F: Flight, S: Surface, J: Jitter>(
     rec: &mut Recorder,
 ) -> Result<bool, RunError> {
     for _ in 0..MAX_SEGMENT_CAPS {
-        match plant.advance_to(target_s, total, &mut |r| rec.push(r)) {
+        let advance = plant.advance_to(target_s, total, &mut |r| rec.push(r));
+        if J::ON && plant.jitter.unphysical().is_some() {
+            return Err(unphysical(plant));
+        }
+        match advance {
             Advance::SegmentCap => continue,
-            Advance::Unphysical => return Err(unphysical(plant)),
             adv => return Ok(adv == Advance::ImpactLimit),
         }
     }
