@@ -1,9 +1,14 @@
 //! `dexter analyze` on a hopper scene: the fixed point of the simulated cycle map and its
-//! slope by finite differences, beside the closed forms.
+//! slope by finite differences, beside the closed forms; for the simplified nonlinear model
+//! with fixed thrust, the Singer–Guckenheimer certificate of eq. 15 through eq. 18 (Lemma 2,
+//! Theorem 1) and eq. 19's first period doublings (docs/stability.md).
 
 use super::closed_forms::{none_reason, ClosedForm, ALPHA_DOUBLING};
 use super::summary::{period_of, TAIL_CYCLES};
 use super::{end_name, model_equation, model_name, HopperConfig};
+use crate::engine::unimodal::cascade::{ratios, Doubling};
+use crate::engine::unimodal::{num, Certificate};
+use crate::model::hopper::analysis::{self as map_analysis, Eq15, Eq15InEnergy, EQ19_SCHWARZIAN};
 use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Cycle, RunEnd, RunOptions, Start};
 use crate::stream::Tail;
@@ -220,6 +225,134 @@ pub struct Analysis<'a> {
     alpha: Option<f64>,
     cycles: usize,
     late_period: Option<usize>,
+    global: Option<Global>,
+}
+
+/// Doublings of eq. 19 located by [`Global`] (Theorem 1: at least six).
+pub const DOUBLINGS: usize = 6;
+
+/// Feigenbaum's constant δ = 4.669201609... (Feigenbaum 1978), for comparison.
+pub const FEIGENBAUM_DELTA: f64 = 4.669_201_609_102_99;
+
+/// The global analysis of eq. 15/19: the certificate and the cascade.
+struct Global {
+    cert: Certificate,
+    /// α = τ χ_l μ / η₁.
+    alpha: f64,
+    /// τ per unit α: η₁ / (χ_l μ), m/s².
+    thrust_per_alpha: f64,
+    cascade: Result<Vec<Doubling>, String>,
+}
+
+impl Global {
+    fn of(cf: &ClosedForm) -> Option<Self> {
+        let ClosedForm::Eq19 {
+            alpha,
+            tau,
+            mu,
+            eta1,
+            chi_l,
+        } = *cf
+        else {
+            return None;
+        };
+        let map = Eq15InEnergy(Eq15 {
+            k_per_m: tau * mu / eta1,
+            chi_l_m: chi_l,
+        });
+        Some(Self {
+            cert: map_analysis::certificate(&map),
+            alpha,
+            thrust_per_alpha: eta1 / (chi_l * mu),
+            cascade: map_analysis::cascade(DOUBLINGS).map_err(|e| e.0),
+        })
+    }
+
+    /// Where the scene's α lies in the cascade.
+    fn regime(&self) -> String {
+        let a = self.alpha;
+        if a <= 1.0 {
+            return "alpha <= 1: no hop (Lemma 1: 0 is the only fixed point)".into();
+        }
+        let Ok(d) = &self.cascade else {
+            return "unknown (the cascade was not located)".into();
+        };
+        match d.iter().position(|x| a < x.parameter) {
+            Some(0) => "1 < alpha < alpha_1 = e^2: period 1 (Theorem 1)".into(),
+            Some(n) => format!(
+                "alpha_{n} < alpha < alpha_{}: period {}",
+                n + 1,
+                1usize << n
+            ),
+            None => format!("alpha > alpha_{}: period >= {}", d.len(), 1usize << d.len()),
+        }
+    }
+
+    fn json(&self) -> serde_json::Value {
+        let mut cert = self.cert.json();
+        cert["map"] =
+            json!("eq. 15 conjugated by eq. 18, h(x) = ln(chi_l/x): f(E) = alpha E e^-E (eq. 19)");
+        cert["coordinate"] = json!("E = ln(chi_l / x) at bottom");
+        cert["schwarzian_argument"] = json!(EQ19_SCHWARZIAN);
+        let (doublings, ratios_v, error) = match &self.cascade {
+            Ok(d) => (
+                d.iter()
+                    .enumerate()
+                    .map(|(i, x)| {
+                        json!({
+                            "n": i + 1,
+                            "period_losing_stability": x.period,
+                            "alpha": num(x.parameter),
+                            "thrust_tau_mps2": num(x.parameter * self.thrust_per_alpha),
+                            "cycle_point_energy": num(x.x),
+                            "multiplier_residual": num(x.multiplier_residual),
+                            "cycle_residual": num(x.residual),
+                        })
+                    })
+                    .collect::<Vec<_>>(),
+                ratios(d).into_iter().map(num).collect::<Vec<_>>(),
+                serde_json::Value::Null,
+            ),
+            Err(e) => (vec![], vec![], json!(e)),
+        };
+        json!({
+            "certificate": cert,
+            "doublings": doublings,
+            "doublings_error": error,
+            "feigenbaum_ratios": ratios_v,
+            "feigenbaum_delta": FEIGENBAUM_DELTA,
+            "regime": self.regime(),
+        })
+    }
+
+    fn text(&self) -> String {
+        let mut s = "  Singer-Guckenheimer certificate of eq. 15 in E = ln(chi_l/x) (eq. 18), f(E) = alpha E e^-E (eq. 19):\n".to_string();
+        s += &format!("  Schwarzian in closed form: {EQ19_SCHWARZIAN}\n");
+        s += &self.cert.text();
+        match &self.cascade {
+            Ok(d) => {
+                s += "  period doublings of eq. 19 (continuation of each 2^n-cycle to multiplier -1):\n";
+                for (i, x) in d.iter().enumerate() {
+                    s += &format!(
+                        "    alpha_{} = {:.12} (tau = {:.9} m/s^2): period {} -> {}\n",
+                        i + 1,
+                        x.parameter,
+                        x.parameter * self.thrust_per_alpha,
+                        x.period,
+                        2 * x.period
+                    );
+                }
+                let r: Vec<String> = ratios(d).iter().map(|r| format!("{r:.6}")).collect();
+                s += &format!(
+                    "  interval ratios (a_n - a_n-1)/(a_n+1 - a_n): {} (Feigenbaum delta = {FEIGENBAUM_DELTA:.6})\n",
+                    r.join(", ")
+                );
+            }
+            Err(e) => s += &format!("  period doublings not located: {e}\n"),
+        }
+        s += &format!("  this scene: {}\n", self.regime());
+        s
+    }
 }
 
 impl Analysis<'_> {
@@ -285,7 +418,29 @@ impl Analysis<'_> {
             "verdict": self.verdict(),
             "period_doubling": self.doubling(),
             "late_period": self.late_period,
+            "global": self.global.as_ref().map_or_else(
+                || json!({"certificate": null, "reason": self.global_reason()}),
+                Global::json,
+            ),
         })
+    }
+
+    /// Why a scene has no certificate.
+    fn global_reason(&self) -> String {
+        let why = if self.sc.params.servo.is_some() {
+            "the energy servo changes the thrust from hop to hop (no one-parameter map of eq. 15/19)"
+        } else {
+            match self.sc.params.model {
+                ModelKind::Linear => {
+                    "the linear model's eq. 17 (Theorem 2, Lemma 4) is not certified by analyze yet"
+                }
+                ModelKind::Full => "the full model (eq. 8) has no closed-form return map",
+                _ => "no closed form applies",
+            }
+        };
+        format!(
+            "no Singer-Guckenheimer certificate: it is given for the simplified nonlinear model with fixed thrust (eq. 15/19); here {why}"
+        )
     }
 
     fn human(&self) -> String {
@@ -323,6 +478,10 @@ impl Analysis<'_> {
             self.late_period
                 .map_or("not settled".into(), |p| p.to_string())
         );
+        match &self.global {
+            Some(g) => s += &g.text(),
+            None => s += &format!("  {}\n", self.global_reason()),
+        }
         s
     }
 
@@ -360,6 +519,7 @@ pub fn analyze(sc: &HopperConfig) -> Result<Analysis<'_>, Failure> {
     let (u0, cycles, late_period) = scene_run(sc, coord)?;
     let fp = CycleMap { sc, coord }.fixed_point(u0)?;
     let cf = ClosedForm::of(sc);
+    let global = cf.as_ref().and_then(Global::of);
     Ok(Analysis {
         sc,
         coord,
@@ -368,5 +528,6 @@ pub fn analyze(sc: &HopperConfig) -> Result<Analysis<'_>, Failure> {
         alpha: cf.and_then(|c| c.alpha()),
         cycles,
         late_period,
+        global,
     })
 }
