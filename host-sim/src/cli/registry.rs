@@ -76,7 +76,9 @@ pub static SYSTEMS: [Entry; 7] = [
     Entry::of::<planar::PlanarSystem>()
         .sweeps::<planar::PlanarSystem>()
         .analyzes::<planar::PlanarSystem>(),
-    Entry::of::<line::LineSystem>().sweeps::<line::LineSystem>(),
+    Entry::of::<line::LineSystem>()
+        .sweeps::<line::LineSystem>()
+        .analyzes::<line::LineSystem>(),
 ];
 
 /// The system that runs a scene with these top-level tables.
