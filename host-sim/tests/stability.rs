@@ -20,8 +20,8 @@ fn hopper(alpha: f64) -> Eq15InEnergy {
 #[test]
 fn the_conjugate_of_eq15_is_eq19() {
     let f = hopper(3.602_409_639);
-    for &e in &[0.05, 0.5, 1.0, 1.3, 2.0, 3.5] {
-        let want = 3.602_409_639 * e * (-e as f64).exp();
+    for &e in &[0.05f64, 0.5, 1.0, 1.3, 2.0, 3.5] {
+        let want: f64 = 3.602_409_639 * e * (-e).exp();
         assert!((f.f(e) - want).abs() <= 1e-13 * want, "E = {e}");
     }
 }

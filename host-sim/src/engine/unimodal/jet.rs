@@ -122,10 +122,6 @@ impl<T: Scalar> Jet<T> {
         let r2 = r * r;
         self.compose(r, -r2, T::cst(2.0) * r2 * r, T::cst(-6.0) * r2 * r2)
     }
-    /// u/w (w ≠ 0).
-    pub fn div(self, w: Self) -> Self {
-        self * w.recip()
-    }
     /// u²  (the product rule, written once so the square's enclosure is the product's).
     pub fn sqr(self) -> Self {
         self * self
