@@ -137,3 +137,78 @@ fn a_linear_hopper_scene_says_why_it_has_no_certificate() {
     assert!(v["global"]["certificate"].is_null());
     assert!(v["global"]["reason"].as_str().unwrap().contains("eq. 17"));
 }
+
+#[test]
+fn basin_of_the_ideal_line_juggler_converges_from_the_certified_grid() {
+    // heights 0.05..1.5 m, velocities -3..3 m/s: first impact speeds up to
+    // sqrt(9 + 2 g 1.5) = 6.20 m/s < v0 = 6.4686 m/s, all inside the certified interval
+    let csv = common::scratch("basin-ideal").join("basin.csv");
+    let o = dexter(&[
+        "basin",
+        &scene("line-juggler-ideal"),
+        "--range",
+        "ball.height_m=0.05:1.5:40",
+        "--range2",
+        "ball.velocity_mps=-3:3:40",
+        "--csv",
+        csv.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["points"], 1600);
+    assert_eq!(v["certified_points"], 1600, "{v}");
+    assert!(v["converged_fraction"].as_f64().unwrap() >= 0.999, "{v}");
+    let rows = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(rows.lines().count(), 1601);
+    assert!(rows.starts_with("ball.height_m,ball.velocity_mps,class,certified\n"));
+}
+
+#[test]
+fn basin_marks_points_outside_the_certified_interval() {
+    // from 2.5 m at rest the first impact speed sqrt(2 g 2.5) = 7.00 m/s exceeds v0
+    let v = json(&[
+        "basin",
+        &scene("line-juggler-ideal"),
+        "--range",
+        "ball.height_m=2.5:2.6:2",
+        "--range2",
+        "ball.velocity_mps=0:0.1:2",
+        "--csv",
+        common::scratch("basin-outside")
+            .join("b.csv")
+            .to_str()
+            .unwrap(),
+        "--json",
+    ]);
+    assert_eq!(v["certified_points"], 0, "{v}");
+}
+
+#[test]
+fn basin_refuses_a_bad_key_and_a_system_without_it() {
+    let o = dexter(&[
+        "basin",
+        &scene("line-juggler-ideal"),
+        "--range",
+        "ball.height_m=0.1:1:2",
+        "--range2",
+        "ball.nonsense=0:1:2",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("ball.nonsense"));
+    let o = dexter(&[
+        "basin",
+        &scene("hopper-fig11"),
+        "--range",
+        "hopper.liftoff_height_m=0.4:0.5:2",
+        "--range2",
+        "hopper.spring_eta1=5:6:2",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("basin"));
+}

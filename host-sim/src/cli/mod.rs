@@ -7,6 +7,7 @@ pub mod registry;
 
 use crate::scene::SceneFile;
 use crate::system::Failure;
+use crate::verbs::basin::BasinRequest;
 use crate::verbs::{AnalyzeRequest, RunRequest, SweepRequest};
 use clap::{Parser, Subcommand};
 use registry::{claim, Entry};
@@ -32,6 +33,8 @@ enum Command {
     Sweep(SweepRequest),
     /// Linearize a scene's return map at its fixed point: eigenvalues or slope, verdict.
     Analyze(AnalyzeRequest),
+    /// Run every point of a two-key grid to its end and classify it (basin map).
+    Basin(BasinRequest),
 }
 
 /// Where the default run finds `scenes/line-juggler.toml` and writes `out/`: the current
@@ -77,6 +80,7 @@ pub fn main() -> ExitCode {
         Command::Run(req) => with_scene(&req.scene, |s, f| (s.run)(f, &req)),
         Command::Sweep(req) => with_scene(&req.scene, |s, f| (s.sweep)(f, &req)),
         Command::Analyze(req) => with_scene(&req.scene, |s, f| (s.analyze)(f, &req)),
+        Command::Basin(req) => with_scene(&req.scene, |s, f| (s.basin)(f, &req)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,6 +6,7 @@
 //! status 2 and a message naming the option ([`crate::system::Failure`]).
 
 mod analyze;
+pub mod basin;
 mod run;
 mod sweep;
 

@@ -59,6 +59,11 @@ pub struct LineAnalysis<'a> {
 }
 
 impl LineAnalysis<'_> {
+    /// The certificate (`None` with κ1 = 0: a linear map).
+    pub fn certificate(&self) -> Option<&Certificate> {
+        self.cert.as_ref()
+    }
+
     fn v0(&self) -> Option<f64> {
         (self.map.c3 > 0.0 && self.map.c1 > 0.0).then(|| (self.map.c1 / self.map.c3).sqrt())
     }

@@ -21,6 +21,7 @@
 pub mod analyze;
 pub mod apexes;
 pub mod assemble;
+pub mod basin;
 pub mod loops;
 pub mod outcome;
 pub mod plots;
