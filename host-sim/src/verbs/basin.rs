@@ -12,7 +12,7 @@
 
 use crate::grid::{map_ordered, Grid, Range};
 use crate::output::{AtomicFile, Sig17};
-use crate::plot::{key_label, Chart};
+use crate::plot::{key_label, Chart, Style};
 use crate::progress;
 use crate::scene::{parse_sets, SceneFile};
 use crate::system::{BasinClass, Basins, Failure, Setup};
@@ -168,24 +168,33 @@ pub fn basin<S: Basins>(file: &SceneFile, req: &BasinRequest) -> Result<(), Fail
 
     if let Some(dir) = &req.plot {
         let mut chart = Chart::new(format!("basin of {name}"), key_label(&kx), key_label(&ky));
-        // one series per class, split by the certificate: the certified region is the set
-        // of points drawn in the "(certified)" colours
-        for class in counts.keys() {
+        // one series per class, split by the certificate (the certified region is the set
+        // of points drawn in the "(certified region)" colours); every series keeps its slot,
+        // empty or not, so that a class has the same colour in every map
+        let mut classes: Vec<String> = ["target", "not_settled", "rest", "safe_state", "failed"]
+            .iter()
+            .map(|c| c.to_string())
+            .collect();
+        let extra: Vec<String> = counts
+            .keys()
+            .filter(|k| !classes.contains(k))
+            .cloned()
+            .collect();
+        classes.extend(extra);
+        for class in &classes {
             for cert in [Some(true), Some(false), None] {
                 let pts: Vec<(f64, f64)> = rows
                     .iter()
                     .filter(|r| &r.2.class.name() == class && r.2.certified == cert)
                     .map(|r| (r.0, r.1))
                     .collect();
-                if pts.is_empty() {
-                    continue;
-                }
-                let label = match cert {
-                    Some(true) => format!("{class} (certified region)"),
-                    Some(false) => format!("{class} (outside the certified region)"),
-                    None => class.clone(),
+                let label = match (pts.is_empty(), cert) {
+                    (true, _) => String::new(),
+                    (false, Some(true)) => format!("{class} (certified region)"),
+                    (false, Some(false)) => format!("{class} (outside the certified region)"),
+                    (false, None) => class.clone(),
                 };
-                chart = chart.dots(label, pts);
+                chart.push(label, pts, Style::Dots);
             }
         }
         for f in chart
