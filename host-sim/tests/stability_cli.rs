@@ -212,3 +212,29 @@ fn basin_refuses_a_bad_key_and_a_system_without_it() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("basin"));
 }
+
+#[test]
+fn analyze_draws_the_certificate_pictures_or_says_why_not() {
+    let dir = common::scratch("analyze-pictures");
+    let d = dir.to_str().unwrap();
+    let o = dexter(&["analyze", &scene("hopper-fig11"), "--plot", d]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for s in ["return-map", "schwarzian", "bifurcation"] {
+        for ext in ["svg", "png"] {
+            let f = dir.join(format!("hopper-fig11-{s}.{ext}"));
+            assert!(f.metadata().map(|m| m.len() > 0).unwrap_or(false), "{f:?}");
+        }
+    }
+    let o = dexter(&["analyze", &scene("line-juggler-ideal"), "--plot", d]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(dir.join("line-juggler-ideal-return-map.svg").exists());
+    // the linear hopper has no certificate to draw: exit 2 with the reason
+    let o = dexter(&["analyze", &scene("hopper-fig09"), "--plot", d]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("eq. 17"));
+}

@@ -94,6 +94,9 @@ pub struct AnalyzeRequest {
     /// Print one JSON object instead of the human report.
     #[arg(long)]
     pub json: bool,
+    /// Write the analysis' pictures into this directory (where the system draws them).
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Print a run's or an analysis' result: `text`, or `json` when asked.

@@ -41,6 +41,7 @@
 pub mod cascade;
 pub mod interval;
 pub mod jet;
+pub mod pictures;
 
 use interval::Interval;
 use jet::{Jet, Scalar};

@@ -7,13 +7,16 @@ use super::closed_forms::{none_reason, ClosedForm, ALPHA_DOUBLING};
 use super::summary::{period_of, TAIL_CYCLES};
 use super::{end_name, model_equation, model_name, HopperConfig};
 use crate::engine::unimodal::cascade::{ratios, Doubling};
-use crate::engine::unimodal::{num, Certificate};
-use crate::model::hopper::analysis::{self as map_analysis, Eq15, Eq15InEnergy, EQ19_SCHWARZIAN};
+use crate::engine::unimodal::{num, pictures, Certificate};
+use crate::model::hopper::analysis::{
+    self as map_analysis, Eq15, Eq15InEnergy, Eq19Family, EQ19_SCHWARZIAN,
+};
 use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Cycle, RunEnd, RunOptions, Start};
 use crate::stream::Tail;
 use crate::system::{Failure, Report};
 use serde_json::json;
+use std::path::{Path, PathBuf};
 
 /// Relative finite-difference step for the closed-form models (4th-order central stencil:
 /// truncation ~h^4, rounding ~1e-16/h; both ~1e-12 here).
@@ -236,6 +239,7 @@ pub const FEIGENBAUM_DELTA: f64 = 4.669_201_609_102_99;
 
 /// The global analysis of eq. 15/19: the certificate and the cascade.
 struct Global {
+    map: Eq15InEnergy,
     cert: Certificate,
     /// α = τ χ_l μ / η₁.
     alpha: f64,
@@ -261,6 +265,7 @@ impl Global {
             chi_l_m: chi_l,
         });
         Some(Self {
+            map,
             cert: map_analysis::certificate(&map),
             alpha,
             thrust_per_alpha: eta1 / (chi_l * mu),
@@ -510,6 +515,29 @@ impl Report for Analysis<'_> {
     }
     fn json(&self) -> Result<String, String> {
         Ok(self.json_value().to_string())
+    }
+    /// `{scene}-return-map`, `{scene}-schwarzian` (eq. 19 in E) and `{scene}-bifurcation`
+    /// (eq. 19 over alpha with the located doublings).
+    fn plot(&self, dir: &Path) -> Result<Vec<PathBuf>, Failure> {
+        let Some(g) = &self.global else {
+            return Err(Failure::usage(format!("--plot: {}", self.global_reason())));
+        };
+        let (stem, coord) = (self.sc.name.as_str(), "bottom energy E = ln(chi_l/x)");
+        let mut files = pictures::return_map(&g.map, &g.cert, coord, dir, stem)?;
+        files.extend(pictures::schwarzian_sign(
+            &g.map, &g.cert, coord, dir, stem,
+        )?);
+        let alphas: Vec<f64> = (0..=600).map(|i| 1.5 + 14.0 * i as f64 / 600.0).collect();
+        let located = g.cascade.as_deref().unwrap_or(&[]);
+        files.extend(pictures::bifurcation(
+            &Eq19Family,
+            &alphas,
+            located,
+            ("alpha = tau chi_l mu / eta1", "late E_n"),
+            dir,
+            stem,
+        )?);
+        Ok(files)
     }
 }
 

@@ -23,10 +23,11 @@
 
 use super::scene::{ControlMode, Scene};
 use crate::engine::unimodal::jet::{Jet, Scalar};
-use crate::engine::unimodal::{certify, num, Certificate, Map1d, Options};
+use crate::engine::unimodal::{certify, num, pictures, Certificate, Map1d, Options};
 use crate::scene::SceneError;
 use crate::system::{Failure, Report};
 use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
 
 /// Eq. 8 as f(v) = c1 v − c3 v³ (impact speed v, m/s).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -187,6 +188,18 @@ impl Report for LineAnalysis<'_> {
     }
     fn json(&self) -> Result<String, String> {
         Ok(self.json_value().to_string())
+    }
+    /// `{scene}-return-map` (with the diagonal and cobwebs) and `{scene}-schwarzian`.
+    fn plot(&self, dir: &Path) -> Result<Vec<PathBuf>, Failure> {
+        let Some(cert) = &self.cert else {
+            return Err(Failure::usage(format!("--plot: {}", self.reason())));
+        };
+        let (stem, coord) = (self.sc.name(), "impact speed v (m/s)");
+        let mut files = pictures::return_map(&self.map, cert, coord, dir, stem)?;
+        files.extend(pictures::schwarzian_sign(
+            &self.map, cert, coord, dir, stem,
+        )?);
+        Ok(files)
     }
 }
 
