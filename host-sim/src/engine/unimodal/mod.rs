@@ -472,8 +472,29 @@ pub const INVARIANCE_TOL: f64 = 1e-12;
 /// image ("to rounding").
 pub const ROLE_TOL: f64 = 1e-12;
 
-/// Certify f on I = [a, b] (a < b, finite).
+/// Certify f on I = [a, b] (a < b, finite; any other interval gets no certificate, with
+/// that reason in [`Certificate::failed`]).
 pub fn certify<M: Map1d>(map: &M, a: f64, b: f64, opts: &Options) -> Certificate {
+    if !(a.is_finite() && b.is_finite() && a < b) {
+        return Certificate {
+            interval: (a, b),
+            image: Interval::ENTIRE,
+            invariant: false,
+            critical_points: vec![],
+            critical_unresolved: vec![],
+            schwarzian: SchwarzianScan::default(),
+            fixed_points: vec![],
+            fixed_unresolved: vec![],
+            endpoints: [EndpointRole::Free; 2],
+            failed: vec![format!(
+                "the interval [{a}, {b}] is empty or not finite: nothing to certify"
+            )],
+            verdict: Verdict::Unstable {
+                cycle: None,
+                unique: false,
+            },
+        };
+    }
     let scale = (b - a).abs().max(f64::MIN_POSITIVE);
     let crit = scan_zeros(
         a,
@@ -941,6 +962,16 @@ mod tests {
                 EndpointRole::MapsToRepellingFixedPoint
             ]
         );
+    }
+
+    #[test]
+    fn an_empty_or_infinite_interval_gets_no_certificate() {
+        for (a, b) in [(1.0, 1.0), (0.0, f64::INFINITY), (f64::NAN, 1.0)] {
+            let c = certify(&Logistic(2.8), a, b, &Options::default());
+            assert_eq!(c.verdict.code(), "unstable");
+            assert!(c.failed[0].contains("nothing to certify"));
+            assert!(c.json()["invariant_interval"][1].is_null() || b.is_finite());
+        }
     }
 
     #[test]
