@@ -225,3 +225,63 @@ fn without_the_conjugacy_eq15_is_not_certified_where_its_schwarzian_is_positive(
     let conj = certificate(&Eq15InEnergy(g));
     assert!(conj.schwarzian.negative(), "{:?}", conj.schwarzian);
 }
+
+/// Eq. 17 written out here: f(E) = ((sqrt E - psi)^2 + psi'^2) exp{-2 beta [pi - atan(psi' /
+/// (sqrt E - psi))]}, and h(x) = (psi'/tan x + psi)^2, h^-1(E) = atan(psi'/(sqrt E - psi)).
+fn eq17(e: f64, beta: f64, psi: f64, psid: f64) -> f64 {
+    let r = e.sqrt();
+    ((r - psi).powi(2) + psid * psid)
+        * (-2.0 * beta * (std::f64::consts::PI - (psid / (r - psi)).atan())).exp()
+}
+
+#[test]
+fn lemma_4s_conjugate_is_eq17_in_phase_coordinates_and_certifies_theorem_2() {
+    use dexter_sim::model::hopper::analysis::{certificate_eq17, Eq17Conjugate};
+    let (beta, psi, psid) = (0.15, 0.8, 2.5);
+    let g = Eq17Conjugate {
+        beta,
+        rho: psi / psid,
+    };
+    for &x in &[0.1, 0.4, 0.8, 1.2, 1.5] {
+        let e = (psid / f64::tan(x) + psi).powi(2);
+        let fe = eq17(e, beta, psi, psid);
+        let want = (psid / (fe.sqrt() - psi)).atan();
+        assert!((g.f(x) - want).abs() < 1e-12, "x {x}: {} vs {want}", g.f(x));
+    }
+    let c = certificate_eq17(&g).expect("physical");
+    assert!(c.schwarzian.negative(), "{:?}", c.schwarzian);
+    let Verdict::Certified { multiplier, .. } = c.verdict else {
+        panic!("{:?} {:?}", c.verdict, c.failed)
+    };
+    // 0 repels with multiplier e^{beta pi} (Lemma 5)
+    assert!((c.fixed_points[0].multiplier - (beta * std::f64::consts::PI).exp()).abs() < 1e-12);
+    // the multiplier is eq. 17's slope at its fixed point, by central differences here
+    let xs = c.fixed_points[1].x;
+    let es = (psid / xs.tan() + psi).powi(2);
+    assert!((eq17(es, beta, psi, psid) - es).abs() < 1e-9 * es);
+    let h = 1e-4 * es;
+    let slope = (eq17(es + h, beta, psi, psid) - eq17(es - h, beta, psi, psid)) / (2.0 * h);
+    assert!((multiplier - slope).abs() < 1e-6, "{multiplier} vs {slope}");
+}
+
+#[test]
+fn every_physical_linear_instance_is_certified_theorem_2() {
+    // Theorem 2: no bifurcation over the physical range. Every (beta, rho) with
+    // rho gbar(c) < 1 on a grid is certified, its fixed point attracting.
+    use dexter_sim::model::hopper::analysis::{certificate_eq17, Eq17Conjugate};
+    let mut checked = 0;
+    for i in 1..=12 {
+        for j in 0..=12 {
+            let g = Eq17Conjugate {
+                beta: 0.04 * i as f64,
+                rho: 0.05 * j as f64,
+            };
+            let Some(c) = certificate_eq17(&g) else {
+                continue;
+            };
+            assert_eq!(c.verdict.code(), "egas", "{g:?}: {:?}", c.failed);
+            checked += 1;
+        }
+    }
+    assert!(checked > 50, "{checked}");
+}

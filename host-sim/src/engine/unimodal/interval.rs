@@ -115,6 +115,62 @@ impl Interval {
         let hi = up(up(self.hi.exp()));
         Interval::new(lo, hi)
     }
+    /// atan x (monotone; two ulps outward).
+    pub fn atan(&self) -> Interval {
+        Interval::new(down(down(self.lo.atan())), up(up(self.hi.atan())))
+    }
+
+    /// sin x: the end values two ulps and 1e−300 outward, widened to ±1 wherever a
+    /// maximum π/2 + 2kπ or a minimum −π/2 + 2kπ may lie in the interval (tested against
+    /// an enclosure of those points, since π is not a float).
+    pub fn sin(&self) -> Interval {
+        self.periodic(f64::sin, core::f64::consts::FRAC_PI_2)
+    }
+
+    /// cos x, as [`Interval::sin`] with the maximum at 2kπ.
+    pub fn cos(&self) -> Interval {
+        self.periodic(f64::cos, 0.0)
+    }
+
+    /// A 2π-periodic function with its maximum at `peak` + 2kπ and minimum at `peak` + π +
+    /// 2kπ, monotone between.
+    fn periodic(&self, f: fn(f64) -> f64, peak: f64) -> Interval {
+        use core::f64::consts::PI;
+        let (l, h) = (self.lo, self.hi);
+        if !(l.is_finite() && h.is_finite()) || h - l >= 6.0 {
+            return Interval::new(-1.0, 1.0);
+        }
+        // does some t0 + k pi (k even: a maximum, odd: a minimum) lie in [l, h]? The float
+        // t0 + k PI is within 4 (|k| + 1) ulps of the exact point: test a widened interval.
+        let k_lo = ((l - peak) / PI).floor() as i64 - 1;
+        let k_hi = ((h - peak) / PI).ceil() as i64 + 1;
+        let (mut top, mut bottom) = (false, false);
+        for k in k_lo..=k_hi {
+            let t = peak + k as f64 * PI;
+            let slack = 1e-15 * (1.0 + t.abs());
+            if t + slack >= l && t - slack <= h {
+                if k.rem_euclid(2) == 0 {
+                    top = true;
+                } else {
+                    bottom = true;
+                }
+            }
+        }
+        let (a, b) = (f(l), f(h));
+        let margin = |x: f64| 4.0 * f64::EPSILON * x.abs() + 1e-300;
+        let lo = if bottom {
+            -1.0
+        } else {
+            a.min(b) - margin(a.min(b))
+        };
+        let hi = if top {
+            1.0
+        } else {
+            a.max(b) + margin(a.max(b))
+        };
+        Interval::new(lo.max(-1.0), hi.min(1.0))
+    }
+
     /// ln x (monotone; two ulps outward); [`Interval::ENTIRE`] unless every element is > 0.
     pub fn ln(&self) -> Interval {
         if self.lo.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
@@ -198,6 +254,29 @@ mod tests {
         let l = Interval::point(std::f64::consts::E).ln();
         assert!(l.contains(1.0));
         assert!(Interval::point(-800.0).exp().lo() >= 0.0);
+    }
+
+    #[test]
+    fn sin_and_cos_enclose_samples_and_their_extremes() {
+        for (l, h) in [
+            (0.0, 0.3),
+            (1.0, 2.0),
+            (-4.0, -1.0),
+            (3.0, 3.2),
+            (-0.1, 6.0),
+        ] {
+            let (s, c) = (Interval::new(l, h).sin(), Interval::new(l, h).cos());
+            for i in 0..=100 {
+                let x = l + (h - l) * i as f64 / 100.0;
+                assert!(s.contains(x.sin()) && c.contains(x.cos()), "{x}");
+            }
+        }
+        assert_eq!(Interval::new(1.0, 2.0).sin().hi(), 1.0);
+        assert_eq!(Interval::new(3.0, 3.2).cos().lo(), -1.0);
+        assert!(Interval::new(0.1, 0.2).sin().hi() < 0.2);
+        assert!(Interval::point(1.0)
+            .atan()
+            .contains(core::f64::consts::FRAC_PI_4));
     }
 
     #[test]

@@ -19,6 +19,12 @@ pub trait Scalar:
     fn exp(self) -> Self;
     /// ln x.
     fn ln(self) -> Self;
+    /// sin x.
+    fn sin(self) -> Self;
+    /// cos x.
+    fn cos(self) -> Self;
+    /// atan x.
+    fn atan(self) -> Self;
 }
 
 impl Scalar for f64 {
@@ -34,6 +40,15 @@ impl Scalar for f64 {
     fn ln(self) -> Self {
         f64::ln(self)
     }
+    fn sin(self) -> Self {
+        f64::sin(self)
+    }
+    fn cos(self) -> Self {
+        f64::cos(self)
+    }
+    fn atan(self) -> Self {
+        f64::atan(self)
+    }
 }
 
 impl Scalar for Interval {
@@ -48,6 +63,15 @@ impl Scalar for Interval {
     }
     fn ln(self) -> Self {
         Interval::ln(&self)
+    }
+    fn sin(self) -> Self {
+        Interval::sin(&self)
+    }
+    fn cos(self) -> Self {
+        Interval::cos(&self)
+    }
+    fn atan(self) -> Self {
+        Interval::atan(&self)
     }
 }
 
@@ -115,6 +139,23 @@ impl<T: Scalar> Jet<T> {
         let r = self.v.recip();
         let r2 = r * r;
         self.compose(self.v.ln(), r, -r2, T::cst(2.0) * r2 * r)
+    }
+    /// sin u: (sin, cos, −sin, −cos).
+    pub fn sin(self) -> Self {
+        let (s, c) = (self.v.sin(), self.v.cos());
+        self.compose(s, c, -s, -c)
+    }
+    /// atan u: φ′ = 1/(1 + u²), φ″ = −2u/(1 + u²)², φ‴ = (6u² − 2)/(1 + u²)³.
+    pub fn atan(self) -> Self {
+        let u = self.v;
+        let r = (T::cst(1.0) + u * u).recip();
+        let r2 = r * r;
+        self.compose(
+            u.atan(),
+            r,
+            T::cst(-2.0) * u * r2,
+            (T::cst(6.0) * u * u - T::cst(2.0)) * r2 * r,
+        )
     }
     /// 1/u (u ≠ 0).
     pub fn recip(self) -> Self {
@@ -211,6 +252,17 @@ mod tests {
             r.d3,
             -24.0 * x * (x * x - 1.0) / (1.0 + x * x).powi(4)
         ));
+    }
+
+    #[test]
+    fn sin_and_atan_match_the_closed_forms() {
+        let x = 0.8_f64;
+        let s = Jet::var(x).sin();
+        assert!(close(s.d1, x.cos()) && close(s.d2, -x.sin()) && close(s.d3, -x.cos()));
+        // atan''' = (6x^2 - 2)/(1 + x^2)^3
+        let a = Jet::var(x).atan();
+        assert!(close(a.d1, 1.0 / (1.0 + x * x)));
+        assert!(close(a.d3, (6.0 * x * x - 2.0) / (1.0 + x * x).powi(3)));
     }
 
     #[test]

@@ -335,3 +335,56 @@ pub const ALPHA_1: f64 = std::f64::consts::E * std::f64::consts::E;
 pub fn cascade(count: usize) -> Result<Vec<cascade::Doubling>, CascadeError> {
     cascade::doublings(&Eq19Family, 3.0, 0.25, count)
 }
+
+/// Lemma 4's conjugate of eq. 17 (the tuned linear model, sec. 4.2) in the
+/// "normalized-phase-angle-at-end-of-thrust" x = h⁻¹(E) = arctan(ψ̇_t/(√E − ψ_t)) ∈ [0, π/2]
+/// (rad): g(x) = arctan(ḡ/(1 − ρ ḡ)), ḡ(x) = sin x e^{β(π − x)}, ρ = ψ_t/ψ̇_t (eq. 21).
+///
+/// Re-derived (the extracted text lost two symbols): with h(x) = (ψ̇_t/tan x + ψ_t)²,
+/// (√E − ψ_t)² + ψ̇_t² = ψ̇_t²/sin²x and eq. 17's exponent −2β(π − x), so
+/// f∘h(x) = ψ̇_t²/sin²x · e^{−2β(π − x)} (the text prints e^{+2β(π − x)}), and
+/// g = h⁻¹∘f∘h = arctan(sin x e^{β(π−x)} / (1 − (ψ_t/ψ̇_t) sin x e^{β(π−x)})) (the text
+/// prints ψ̇_t/ψ_t, against its own ρ = ψ_t/ψ̇_t of eq. 21). The multiplier at a fixed
+/// point is the same in every coordinate, so it is f′(E*) of eq. 17.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Eq17Conjugate {
+    /// β (damping ratio parameter of eq. 16), dimensionless.
+    pub beta: f64,
+    /// ρ = ψ_t/ψ̇_t, dimensionless.
+    pub rho: f64,
+}
+
+impl Map1d for Eq17Conjugate {
+    fn jet<T: Scalar>(&self, x: Jet<T>) -> Jet<T> {
+        let pi = std::f64::consts::PI;
+        let gbar = x.sin() * (x.scale(-self.beta) + Jet::cst(self.beta * pi)).exp();
+        let den = Jet::cst(1.0) - gbar.scale(self.rho);
+        (gbar * den.recip()).atan()
+    }
+}
+
+impl Eq17Conjugate {
+    /// ḡ's critical point c = arctan(1/β) (Lemma 4), rad.
+    pub fn critical(&self) -> f64 {
+        (1.0 / self.beta).atan()
+    }
+
+    /// ḡ(x) = sin x e^{β(π − x)}.
+    pub fn gbar(&self, x: f64) -> f64 {
+        x.sin() * (self.beta * (std::f64::consts::PI - x)).exp()
+    }
+
+    /// True if g is defined on all of [0, π/2]: ρ ḡ(c) < 1 (else some bottom's thrust does
+    /// not end in stance, √E ≤ ψ_t: the model leaves its physical domain, Lemma 7).
+    pub fn physical(&self) -> bool {
+        self.beta > 0.0 && self.rho * self.gbar(self.critical()) < 1.0
+    }
+}
+
+/// The certificate of eq. 17 through Lemma 4's conjugate, on [0, g(c)]: g maps [0, π/2]
+/// into [0, g(c)] (its maximum); 0 (E → ∞) is a repelling fixed point with multiplier
+/// e^{βπ} (Lemma 5). `None` if the model is not physical ([`Eq17Conjugate::physical`]).
+pub fn certificate_eq17(map: &Eq17Conjugate) -> Option<Certificate> {
+    map.physical()
+        .then(|| certify(map, 0.0, map.f(map.critical()), &Options::default()))
+}

@@ -9,7 +9,7 @@ use super::{end_name, model_equation, model_name, HopperConfig};
 use crate::engine::unimodal::cascade::{ratios, Doubling};
 use crate::engine::unimodal::{num, pictures, Certificate};
 use crate::model::hopper::analysis::{
-    self as map_analysis, Eq15, Eq15InEnergy, Eq19Family, EQ19_SCHWARZIAN,
+    self as map_analysis, Eq15, Eq15InEnergy, Eq17Conjugate, Eq19Family, EQ19_SCHWARZIAN,
 };
 use crate::model::hopper::params::ModelKind;
 use crate::model::hopper::{Cycle, RunEnd, RunOptions, Start};
@@ -229,6 +229,7 @@ pub struct Analysis<'a> {
     cycles: usize,
     late_period: Option<usize>,
     global: Option<Global>,
+    linear: Option<Linear>,
 }
 
 /// Doublings of eq. 19 located by [`Global`] (Theorem 1: at least six).
@@ -236,6 +237,80 @@ pub const DOUBLINGS: usize = 6;
 
 /// Feigenbaum's constant δ = 4.669201609... (Feigenbaum 1978), for comparison.
 pub const FEIGENBAUM_DELTA: f64 = 4.669_201_609_102_99;
+
+/// The certificate of the tuned linear model through Lemma 4's conjugate (Theorem 2).
+struct Linear {
+    map: Eq17Conjugate,
+    /// `None`: the model leaves its physical domain (ρ ḡ(c) ≥ 1).
+    cert: Option<Certificate>,
+    /// False for a slightly detuned scene compared with eq. 17 approximately.
+    exact: bool,
+}
+
+/// Lemma 4's closed-form argument (the paper's, cited; the sign is proven here by interval
+/// arithmetic on g itself).
+const LEMMA4_SCHWARZIAN: &str = "Lemma 4: g = k o gbar with k = arctan o hbar^-1 (S(k) < 0: S(arctan) < 0 and hbar is projective) and S(gbar) = -v^T G v / (cos p - beta sin p)^2 < 0, G positive definite, so S(g) = S(k)(gbar) gbar'^2 + S(gbar) < 0; here proven by interval arithmetic on g";
+
+impl Linear {
+    fn of(cf: &ClosedForm) -> Option<Self> {
+        let ClosedForm::Eq17 { map, .. } = cf else {
+            return None;
+        };
+        let (beta, psi, psi_dot) = map.thrust_vector();
+        let g = Eq17Conjugate {
+            beta,
+            rho: psi / psi_dot,
+        };
+        Some(Self {
+            map: g,
+            cert: map_analysis::certificate_eq17(&g),
+            exact: cf.exact(),
+        })
+    }
+
+    fn note(&self) -> &'static str {
+        if self.exact {
+            "Theorem 2: every physically valid instance has a single essentially globally asymptotically stable fixed point, so no bifurcation over the physical range"
+        } else {
+            "approximate: this scene is slightly detuned, and eq. 17 (hence the certificate) is exact only for the tuned model"
+        }
+    }
+
+    fn json(&self) -> serde_json::Value {
+        let mut cert = match &self.cert {
+            Some(c) => c.json(),
+            None => {
+                json!({"verdict_code": null, "reason": "rho gbar(c) >= 1: the thrust does not end in stance for some bottoms (outside the model's physical domain, Lemma 7)"})
+            }
+        };
+        cert["map"] = json!("eq. 17 conjugated by h^-1(E) = arctan(psi_t'/(sqrt E - psi_t)) (eq. 20): g(x) = arctan(gbar/(1 - rho gbar)), gbar = sin x e^(beta (pi - x)) (Lemma 4)");
+        cert["coordinate"] = json!("x = arctan(psi_t' / (sqrt E - psi_t)), rad");
+        cert["schwarzian_argument"] = json!(LEMMA4_SCHWARZIAN);
+        json!({
+            "certificate": cert,
+            "beta": num(self.map.beta),
+            "rho": num(self.map.rho),
+            "exact": self.exact,
+            "regime": self.note(),
+        })
+    }
+
+    fn text(&self) -> String {
+        let mut s = format!(
+            "  Singer-Guckenheimer certificate of eq. 17 through Lemma 4's conjugate in x = arctan(psi_t'/(sqrt E - psi_t)), beta = {:.6}, rho = {:.6}:\n",
+            self.map.beta, self.map.rho
+        );
+        s += &format!("  Schwarzian: {LEMMA4_SCHWARZIAN}\n");
+        match &self.cert {
+            Some(c) => s += &c.text(),
+            None => {
+                s += "  no certificate: rho gbar(c) >= 1 (outside the model's physical domain)\n"
+            }
+        }
+        s += &format!("  {}\n", self.note());
+        s
+    }
+}
 
 /// The global analysis of eq. 15/19: the certificate and the cascade.
 struct Global {
@@ -423,10 +498,11 @@ impl Analysis<'_> {
             "verdict": self.verdict(),
             "period_doubling": self.doubling(),
             "late_period": self.late_period,
-            "global": self.global.as_ref().map_or_else(
-                || json!({"certificate": null, "reason": self.global_reason()}),
-                Global::json,
-            ),
+            "global": match (&self.global, &self.linear) {
+                (Some(g), _) => g.json(),
+                (None, Some(l)) => l.json(),
+                _ => json!({"certificate": null, "reason": self.global_reason()}),
+            },
         })
     }
 
@@ -437,14 +513,14 @@ impl Analysis<'_> {
         } else {
             match self.sc.params.model {
                 ModelKind::Linear => {
-                    "the linear model's eq. 17 (Theorem 2, Lemma 4) is not certified by analyze yet"
+                    "eq. 17 (Theorem 2, Lemma 4) is exact only for the tuned linear model, and this scene is detuned too far to compare with it"
                 }
                 ModelKind::Full => "the full model (eq. 8) has no closed-form return map",
                 _ => "no closed form applies",
             }
         };
         format!(
-            "no Singer-Guckenheimer certificate: it is given for the simplified nonlinear model with fixed thrust (eq. 15/19); here {why}"
+            "no Singer-Guckenheimer certificate: it is given for the simplified nonlinear model with fixed thrust (eq. 15/19) and the tuned linear model (eq. 17); here {why}"
         )
     }
 
@@ -483,9 +559,10 @@ impl Analysis<'_> {
             self.late_period
                 .map_or("not settled".into(), |p| p.to_string())
         );
-        match &self.global {
-            Some(g) => s += &g.text(),
-            None => s += &format!("  {}\n", self.global_reason()),
+        match (&self.global, &self.linear) {
+            (Some(g), _) => s += &g.text(),
+            (None, Some(l)) => s += &l.text(),
+            _ => s += &format!("  {}\n", self.global_reason()),
         }
         s
     }
@@ -519,6 +596,20 @@ impl Report for Analysis<'_> {
     /// `{scene}-return-map`, `{scene}-schwarzian` (eq. 19 in E) and `{scene}-bifurcation`
     /// (eq. 19 over alpha with the located doublings).
     fn plot(&self, dir: &Path) -> Result<Vec<PathBuf>, Failure> {
+        if let (None, Some(l)) = (&self.global, &self.linear) {
+            let Some(cert) = &l.cert else {
+                return Err(Failure::usage(
+                    "--plot: no certificate (outside the model's physical domain)",
+                ));
+            };
+            let (stem, coord) = (
+                self.sc.name.as_str(),
+                "x = arctan(psi_t'/(sqrt E - psi_t)) (rad)",
+            );
+            let mut files = pictures::return_map(&l.map, cert, coord, dir, stem)?;
+            files.extend(pictures::schwarzian_sign(&l.map, cert, coord, dir, stem)?);
+            return Ok(files);
+        }
         let Some(g) = &self.global else {
             return Err(Failure::usage(format!("--plot: {}", self.global_reason())));
         };
@@ -548,6 +639,7 @@ pub fn analyze(sc: &HopperConfig) -> Result<Analysis<'_>, Failure> {
     let fp = CycleMap { sc, coord }.fixed_point(u0)?;
     let cf = ClosedForm::of(sc);
     let global = cf.as_ref().and_then(Global::of);
+    let linear = cf.as_ref().and_then(Linear::of);
     Ok(Analysis {
         sc,
         coord,
@@ -557,5 +649,6 @@ pub fn analyze(sc: &HopperConfig) -> Result<Analysis<'_>, Failure> {
         cycles,
         late_period,
         global,
+        linear,
     })
 }
