@@ -2,7 +2,8 @@
 //! claim a scene ([`SYSTEMS`]), and the verbs each runs. Adding a system is one line here.
 
 use crate::scene::SceneFile;
-use crate::system::{unsupported, Analyzes, Basins, Failure, Sweeps, System};
+use crate::system::basin::Basins;
+use crate::system::{unsupported, Analyzes, Failure, Sweeps, System};
 use crate::systems::{arm, feeder, hopper, line, planar, planar_juggler};
 use crate::verbs::basin::BasinRequest;
 use crate::verbs::{self, AnalyzeRequest, RunRequest, SweepRequest};

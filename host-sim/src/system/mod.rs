@@ -8,14 +8,13 @@
 //! registry (`crate::cli`) use them. Nothing here names a system.
 
 mod analyze;
-mod basin;
+pub mod basin;
 mod failure;
 mod length;
 mod sweep;
 pub mod target;
 
 pub use analyze::{Analyzes, Report};
-pub use basin::{BasinClass, Basins};
 pub use failure::{Failure, EXIT_RUN, EXIT_SCENE};
 pub use length::RunLength;
 pub use sweep::{SweepBase, SweepReport, Sweeps};

@@ -7,7 +7,7 @@
 use super::scene::Scene;
 use super::{LineOutcome, LineSystem};
 use crate::engine::unimodal::Verdict;
-use crate::system::{BasinClass, Basins};
+use crate::system::basin::{BasinClass, Basins};
 
 impl Basins for LineSystem {
     fn classify(_: &Scene, out: &LineOutcome) -> BasinClass {
