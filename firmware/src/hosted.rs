@@ -1,9 +1,10 @@
 //! The controllers this firmware image hosts, as one enum the server dispatches on.
 //!
 //! Every hosted controller is a [`FixedRate`] controller of the core with a [`Wire`] impl
-//! (its variants in `dexter_core::protocol::kinds`). Hosting one more is one line in the
-//! `hosted!` list at the end of this file; the server, the links and the host's HIL driver
-//! do not change. A kind that is not listed here is refused at `Configure`
+//! (its variants in `dexter_core::protocol::kinds`). The hosted kinds are not listed here:
+//! `Hosted` is generated from the core's one list of kinds (`dexter_core::for_each_kind!`),
+//! each behind the cargo feature that list names; the server, the links and the host's HIL driver
+//! do not change. A kind this image leaves out is refused at `Configure`
 //! (`Rejection::NotHosted`), so an image can leave out the controllers a board does not
 //! run, to save flash.
 //!
@@ -11,8 +12,8 @@
 //! juggler and the link check always; the tilt table (`tilt`), the hopper (`hop`) and the
 //! one-joint arm (`arm`) each behind its feature. The default image (`tilt`, `hop`) is the
 //! one `memory.x`'s 32 KiB of flash was sized for; the arm image is built with
-//! `--no-default-features --features arm` (firmware/README.md, "Images"). An entry's
-//! `if <cfg predicate>` gates its variant and every match arm on it.
+//! `--no-default-features --features arm` (firmware/README.md, "Images"). A kind's
+//! `if <cfg predicate>` in that list gates its variant and every match arm on it.
 //!
 //! Timing: [`Hosted::step`] and [`Hosted::safe`] measure the core's `step`/`safe` call
 //! only, with interrupts masked; the dispatch on the kind and the wrapping of the command
@@ -96,7 +97,7 @@ macro_rules! hosted_kinds {
 
 /// `Hosted`: one variant per hosted controller, and its dispatch.
 macro_rules! hosted {
-    ($($(#[$doc:meta])* $name:ident($controller:ty) $(if $cfg:meta)?),+ $(,)?) => {
+    ($($name:ident($core:ty) $(if $cfg:meta)?),+ $(,)?) => {
         /// A configured controller of one of the kinds this image hosts.
         ///
         /// Its variants differ in size by design: there is no heap to box the large ones
@@ -104,17 +105,19 @@ macro_rules! hosted {
         /// largest kind (the linker's RAM budget checks it).
         #[allow(clippy::large_enum_variant)]
         pub enum Hosted {
-            $($(#[$doc])* #[cfg(all($($cfg)?))] $name($controller),)+
+            $(#[doc = concat!("The `", stringify!($name), "` kind (`protocol::Kind::", stringify!($name), "`).")]
+            #[cfg(all($($cfg)?))] $name(hosted_type!($name, $core)),)+
         }
 
         /// The parameters of a kind this image hosts, as `Configure` decodes them (the
         /// decoder of a kind it does not host is left out: `protocol::Partial`).
         #[derive(Clone, Copy)]
         pub enum Params {
-            $($(#[$doc])* #[cfg(all($($cfg)?))] $name(<$controller as FixedRate>::Params),)+
+            $(#[doc = concat!("The `", stringify!($name), "` kind's parameters.")]
+            #[cfg(all($($cfg)?))] $name(<$core as FixedRate>::Params),)+
         }
 
-        hosted_kinds!(Params { $($(#[cfg($cfg)])? $name($controller)),+ });
+        hosted_kinds!(Params { $($(#[cfg($cfg)])? $name($core)),+ });
 
         impl Hosted {
             /// The controller `params` ask for, or the error naming its first invalid
@@ -122,14 +125,14 @@ macro_rules! hosted {
             pub fn configure(params: &Params) -> Result<Self, ParamError> {
                 match params {
                     $(#[cfg(all($($cfg)?))]
-                    Params::$name(p) => configure_as::<$controller>(p).map(Hosted::$name),)+
+                    Params::$name(p) => configure_as::<hosted_type!($name, $core)>(p).map(Hosted::$name),)+
                 }
             }
 
             /// The configured controller's kind.
             pub fn kind(&self) -> Kind {
                 match self {
-                    $(#[cfg(all($($cfg)?))] Hosted::$name(_) => <$controller as Wire>::KIND,)+
+                    $(#[cfg(all($($cfg)?))] Hosted::$name(_) => <$core as Wire>::KIND,)+
                 }
             }
 
@@ -174,15 +177,17 @@ type HostedTilt = dexter_core::tilt_control::TiltController;
 type HostedTilt =
     dexter_core::tilt_control::TiltControllerWith<dexter_core::tilt_control::sincos::BackendSinCos>;
 
-hosted! {
-    /// The line juggler (mirror law, estimator, paddle tracker).
-    Line(dexter_core::control::Controller),
-    /// The link check (echoes a scaled value).
-    Echo(dexter_core::echo::Echo),
-    /// The kappa-tilt table with energy feedback.
-    Tilt(HostedTilt) if feature = "tilt",
-    /// The hopper's thrust valve.
-    Hop(dexter_core::hop_control::HopController) if feature = "hop",
-    /// The one-joint arm (B-spline trajectory tracker with inverse dynamics).
-    Arm(dexter_core::arm_control::ArmController) if feature = "arm",
+/// The type in kind `$name`'s slot: the core's controller `$core`, but [`HostedTilt`] in the
+/// tilt slot.
+macro_rules! hosted_type {
+    (Tilt, $core:ty) => {
+        HostedTilt
+    };
+    ($name:ident, $core:ty) => {
+        $core
+    };
 }
+
+// The hosted kinds are the core's list (`dexter_core::for_each_kind!`, in
+// `protocol/kinds.rs`), each behind the image feature the list names.
+dexter_core::for_each_kind!(hosted);

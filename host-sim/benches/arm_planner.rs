@@ -6,9 +6,9 @@
 //! so `cargo bench -p dexter-sim --bench arm_planner` prints the table as well.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use dexter_sim::model::arm::examples;
 use dexter_sim::model::arm::params::ArmConfig;
 use dexter_sim::model::arm::planner::plan;
+use dexter_sim::systems::arm::examples;
 use std::hint::black_box;
 use std::time::Duration;
 

@@ -90,6 +90,65 @@ pub trait StepController<C: FixedRate = Controller> {
     }
 }
 
+/// A controller whose steps move a run's progress bar: every [`Paced::EVERY`] steps the bar
+/// learns the simulated time (steps x period) and the count of what else ends the run
+/// (`events`: impacts, cycles, kept by whoever sees them). So a run shows where it is even
+/// when nothing but time advances (a stalled hopper completes no cycle), against the bounds
+/// the bar was made with.
+pub struct Paced<'a, C: FixedRate> {
+    inner: &'a mut dyn StepController<C>,
+    bar: crate::progress::Progress,
+    events: &'a std::cell::Cell<u64>,
+    dt_s: f64,
+    steps: u64,
+}
+
+impl<'a, C: FixedRate> Paced<'a, C> {
+    /// Steps between updates of the bar.
+    pub const EVERY: u64 = 4096;
+
+    /// `inner`, stepped at period `dt_s` (s), moving `bar` (limits: events, then seconds).
+    pub fn new(
+        inner: &'a mut dyn StepController<C>,
+        bar: crate::progress::Progress,
+        events: &'a std::cell::Cell<u64>,
+        dt_s: f64,
+    ) -> Self {
+        Self {
+            inner,
+            bar,
+            events,
+            dt_s,
+            steps: 0,
+        }
+    }
+
+    /// The run ended: clear the bar.
+    pub fn finish(&self) {
+        self.bar.finish();
+    }
+
+    #[inline]
+    fn tick(&mut self) {
+        self.steps += 1;
+        if self.steps.is_multiple_of(Self::EVERY) {
+            let t = self.steps as f64 * self.dt_s;
+            self.bar.update([self.events.get() as f64, t]);
+        }
+    }
+}
+
+impl<C: FixedRate> StepController<C> for Paced<'_, C> {
+    fn step(&mut self, frame: &C::Frame) -> Result<StepOutput<C::Command>, ControllerError> {
+        self.tick();
+        self.inner.step(frame)
+    }
+    fn command(&mut self, frame: &C::Frame) -> Result<C::Command, ControllerError> {
+        self.tick();
+        self.inner.command(frame)
+    }
+}
+
 /// Software in the loop: the shared core, linked in, f32, the same code the firmware runs.
 pub struct Sil<C = Controller> {
     controller: C,

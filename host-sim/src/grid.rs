@@ -81,13 +81,24 @@ impl Range {
         })
     }
 
-    /// The `i`-th value (`i < count`).
+    /// The `i`-th value (`i < count`): `from + (to - from) i / (N - 1)`, the last one `to`
+    /// exactly (the formula's rounding could step past an inclusive limit), and, where
+    /// `to - from` overflows, the same point as `from (1 - t) + to t`, which does not.
     pub fn value(&self, i: u32) -> f64 {
-        if self.count == 1 {
+        let n = self.count.saturating_sub(1);
+        if i == 0 || n == 0 {
             return self.from;
         }
-        let n = self.count - 1;
-        self.from + (self.to - self.from) * f64::from(i) / f64::from(n)
+        if i >= n {
+            return self.to;
+        }
+        let span = self.to - self.from;
+        if span.is_finite() {
+            self.from + span * f64::from(i) / f64::from(n)
+        } else {
+            let t = f64::from(i) / f64::from(n);
+            self.from * (1.0 - t) + self.to * t
+        }
     }
 
     /// The values of the range.
@@ -212,6 +223,23 @@ mod tests {
         let e = Grid::new(x.clone(), Some(y)).unwrap_err();
         assert!(e.reason.contains("2000000 points"), "{e}");
         assert!(Grid::new(x.clone(), Some(x)).is_err());
+    }
+
+    #[test]
+    fn the_last_value_is_the_end_exactly_and_a_huge_span_does_not_overflow() {
+        // 0.1 + 0.9 * 13 / 13 rounds to 1.0000000000000002, past an inclusive limit of 1
+        let r = Range::parse("planar.restitution=0.1:1:14").unwrap();
+        assert_eq!(r.value(13), 1.0);
+        assert_eq!(r.values().len(), 14);
+        assert!(r.values().iter().all(|v| (0.1..=1.0).contains(v)));
+        let r = Range::parse("planar.tip_angle_rad=0.001:1.5707963267948966:12").unwrap();
+        assert_eq!(r.value(11), std::f64::consts::FRAC_PI_2);
+        // to - from = 3.4e308 overflows: every value finite, symmetric about 0
+        let r = Range::parse("k=-1.7e308:1.7e308:3").unwrap();
+        assert_eq!(r.values(), vec![-1.7e308, 0.0, 1.7e308]);
+        let r = Range::parse("k=-1.7e308:1.7e308:5").unwrap();
+        assert!((r.value(1) / -0.85e308 - 1.0).abs() < 1e-15);
+        assert!(r.values().iter().all(|v| v.is_finite()));
     }
 
     #[test]

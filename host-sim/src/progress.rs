@@ -82,7 +82,7 @@ impl Progress {
             .limits
             .iter()
             .zip(values)
-            .map(|((_, unit), v)| format!("{} {unit}", v.round()))
+            .map(|(&(limit, unit), v)| bound_words(v, limit, unit))
             .collect();
         self.bar.set_message(words.join(", "));
         self.bar
@@ -95,9 +95,28 @@ impl Progress {
     }
 }
 
+/// `value` of a limit in words, with the bound that will stop the run: `120 of 600 s
+/// simulated` (or `120 s simulated` for a limit too large to be one, e.g. `i64::MAX`).
+fn bound_words(value: f64, limit: f64, unit: &str) -> String {
+    if limit.is_finite() && limit < 1e15 {
+        format!("{} of {} {unit}", value.round(), limit.round())
+    } else {
+        format!("{} {unit}", value.round())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_words_name_the_bound_that_stops_the_run() {
+        assert_eq!(
+            bound_words(119.6, 600.0, "s simulated"),
+            "120 of 600 s simulated"
+        );
+        assert_eq!(bound_words(5.0, i64::MAX as f64, "impacts"), "5 impacts");
+    }
 
     #[test]
     fn the_fraction_is_that_of_the_limit_nearest_to_its_end() {

@@ -14,7 +14,6 @@
 mod common;
 
 use common::{dexter, ok, scene, scratch};
-use dexter_sim::model::arm::examples;
 use serde_json::Value;
 use std::collections::HashMap;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -116,22 +115,6 @@ fn event<'a>(r: &'a Run, kind: &str) -> Option<&'a Row> {
 }
 
 const TASKS: [&str; 4] = ["arm-snatch", "arm-throw", "arm-roll", "arm-rolling-throw"];
-
-#[test]
-fn the_shipped_scenes_are_the_librarys_examples() {
-    for (name, text) in [
-        ("arm-snatch", examples::SNATCH),
-        ("arm-throw", examples::THROW),
-        ("arm-roll", examples::ROLL),
-        ("arm-rolling-throw", examples::ROLLING_THROW),
-    ] {
-        assert_eq!(
-            std::fs::read_to_string(scene(name)).unwrap(),
-            text,
-            "{name}"
-        );
-    }
-}
 
 #[test]
 fn every_task_executes_ok_needs_its_mu_and_survives_tracking() {

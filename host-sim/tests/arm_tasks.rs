@@ -2,12 +2,12 @@
 //! verifier at the planned mu, and fails at 0.95 mu; the nine-knot roll of a square has
 //! fig. 2's windup; the plan runs on the core's controller (SIL); scene errors name keys.
 
-use dexter_sim::model::arm::examples;
 use dexter_sim::model::arm::motion::ArmMotion;
 use dexter_sim::model::arm::params::ArmConfig;
 use dexter_sim::model::arm::simulate::Executed;
-use dexter_sim::model::arm::summary::{run, ArmSummary, RunOptions};
 use dexter_sim::model::arm::{ArmError, ArmScene};
+use dexter_sim::systems::arm::examples;
+use dexter_sim::systems::arm::execute::{run, ArmSummary, RunOptions};
 
 fn system(text: &str) -> ArmScene {
     ArmConfig::from_toml_str(text).unwrap().validate().unwrap()

@@ -427,43 +427,37 @@ fn dissipation_regime_loses_energy_and_stays_on_eq19() {
         // cycle): back on the fixed point x* = chi_l / alpha (Theorem 1)
         assert!((run.cycles.last().unwrap().bottom_height_m - 0.5 / alpha).abs() < 1e-10);
     }
-    // A huge thrust (alpha = 1e6, chaotic): bottoms as deep as chi_l e^-3.7e5 underflow x_n to
-    // 0 but E_n stays exact, and the run matches the core's f64 iteration of eq. 19 until the
-    // orbit is absorbed by the zero-height hop E = 0.
+    // A huge thrust (alpha = 1e6, chaotic): E_1 = f(0.1) = 9e4, a bottom chi_l e^-9e4 that
+    // underflows x_n to 0, and a liftoff speed (v^2 = 2 eta1 f(E_1), f(E_1) underflows to 0)
+    // that is 0: the hopper does not leave the ground again. Every recorded cycle matches
+    // the core's f64 iteration of eq. 19, and the run ends where that iteration reaches 0.
     let m = eq9(0.0);
+    let alpha = m.alpha(m.thrust_for_alpha(1e6));
     let big = eq9_hopper(0.0, m.thrust_for_alpha(1e6));
-    let mut e_map = 0.1;
-    let run = big
-        .simulate(
-            Start::Bottom {
-                height_m: 0.5 * (-0.1f64).exp(),
-            },
-            40,
-            &MAP_ONLY,
-        )
-        .unwrap();
-    assert_eq!(run.end, RunEnd::Completed);
-    for c in &run.cycles {
+    let mut map = vec![0.1];
+    while *map.last().unwrap() != 0.0 {
+        map.push(energy_return_map(*map.last().unwrap(), alpha));
+    }
+    // the cycle from the last nonzero E is the one that does not lift off
+    let hops = map.len() - 2;
+    let start = Start::Bottom {
+        height_m: 0.5 * (-0.1f64).exp(),
+    };
+    let run = big.simulate(start, 40, &MAP_ONLY).unwrap();
+    assert_eq!(run.end, RunEnd::NoLiftoff);
+    assert_eq!(run.cycles.len(), hops);
+    for (c, e_map) in run.cycles.iter().zip(&map) {
         assert!(c.energy.is_finite() && c.bottom_height_m >= 0.0);
         assert!(
             (c.energy - e_map).abs() <= 1e-9 * (1.0 + e_map),
             "{} vs {e_map}",
             c.energy
         );
-        e_map = energy_return_map(e_map, m.alpha(m.thrust_for_alpha(1e6)));
     }
-    // with times asked for, the infinitely slow decompression from an underflowed bottom
-    // is a named end, not an infinite time
-    let timed = big
-        .simulate(
-            Start::Bottom {
-                height_m: 0.5 * (-0.1f64).exp(),
-            },
-            40,
-            &RunOptions::default(),
-        )
-        .unwrap();
-    assert_eq!(timed.end, RunEnd::NonFinite);
+    // with times asked for, the same end (the decompression from an underflowed bottom
+    // would take forever), not an infinite time
+    let timed = big.simulate(start, 40, &RunOptions::default()).unwrap();
+    assert_eq!(timed.end, RunEnd::NoLiftoff);
     assert!(timed
         .cycles
         .iter()
@@ -471,26 +465,19 @@ fn dissipation_regime_loses_energy_and_stays_on_eq19() {
 }
 
 #[test]
-fn zero_height_hops_are_fixed_points_in_every_model() {
-    // touchdown with zero speed: eq. 9's fixed point E = 0 (Lemma 1), x_n = chi_l
+fn a_zero_height_hop_is_no_liftoff_in_every_model() {
+    // touchdown with zero speed: eq. 9's fixed point E = 0 (Lemma 1), x_n = chi_l. The body
+    // rests on its extended leg: a cycle would take no time and leave at 0 m/s, which is
+    // not a hop, so the run ends with no liftoff and no cycles (not 50 zero-time cycles of
+    // "period 1")
     let h = eq9_hopper(0.0, 41.86);
-    let run = h
-        .simulate(
-            Start::Flight {
-                height_m: 0.5,
-                velocity_mps: 0.0,
-            },
-            50,
-            &RunOptions::default(),
-        )
-        .unwrap();
-    assert_eq!(run.end, RunEnd::Completed);
-    for c in &run.cycles {
-        assert_eq!(c.energy, 0.0);
-        assert_eq!(c.bottom_height_m, 0.5);
-        assert_eq!(c.apex.height_m, 0.5);
-        assert_eq!(c.next_touchdown.time_s, 0.0);
-    }
+    let at_rest = |chi_l: f64| Start::Flight {
+        height_m: chi_l,
+        velocity_mps: 0.0,
+    };
+    let run = h.simulate(at_rest(0.5), 50, &RunOptions::default()).unwrap();
+    assert_eq!(run.end, RunEnd::NoLiftoff);
+    assert!(run.cycles.is_empty());
     // the zero hop repels (alpha > 1): a 1e-9 m hop grows to the period-1 orbit x* = chi_l/alpha
     let run = h
         .simulate(
@@ -502,10 +489,11 @@ fn zero_height_hops_are_fixed_points_in_every_model() {
             &MAP_ONLY,
         )
         .unwrap();
+    assert_eq!(run.end, RunEnd::Completed);
     let alpha = 41.86 * 0.5 / 5.81;
     assert!((run.cycles.last().unwrap().bottom_height_m - 0.5 / alpha).abs() < 1e-10);
     // linear (eq. 16, touchdown at the spring's equilibrium) and full (eq. 8) models: the
-    // body starts at rest at chi_l, the thrust finds the leg already extended: a zero hop
+    // body starts at rest at chi_l, the thrust finds the leg already extended: no hop
     let lin = LinearSpring::from_eq16(20.0, 0.2, 9.81).unwrap();
     let hl = Hopper::new(
         HopperModel::Linear(lin),
@@ -516,24 +504,43 @@ fn zero_height_hops_are_fixed_points_in_every_model() {
         FullNonlinear::new(0.5, 5.81, 2.33, 0.0, 10.0, Integrator::rk4(1e-4).unwrap()).unwrap();
     let hf = Hopper::new(HopperModel::Full(full), raibert(41.86, 0.01)).unwrap();
     for (hop, chi_l) in [(hl, 0.0), (hf, 0.5)] {
-        let run = hop
-            .simulate(
-                Start::Flight {
-                    height_m: chi_l,
-                    velocity_mps: 0.0,
-                },
-                20,
-                &RunOptions::default(),
-            )
-            .unwrap();
-        assert_eq!(run.end, RunEnd::Completed);
-        for c in &run.cycles {
-            assert!(c.early_liftoff);
-            assert_eq!(c.bottom_height_m, chi_l);
-            assert_eq!(c.liftoff.velocity_mps, 0.0);
-            assert_eq!(c.next_touchdown.time_s, 0.0);
-        }
+        let run = hop.simulate(at_rest(chi_l), 20, &RunOptions::default()).unwrap();
+        assert_eq!(run.end, RunEnd::NoLiftoff);
+        assert!(run.cycles.is_empty());
     }
+}
+
+#[test]
+fn a_leg_mass_that_leaves_no_hop_height_stops_the_run_as_the_closed_form_says() {
+    // eq. 7 scales the liftoff speed by 1 / (1 + mu'): with mu' = 1e300 the hop height
+    // v^2 / 2g underflows to 0, and eq. 14's mu = (1 + mu')^-2 makes alpha = 0 <= 1: no
+    // hopping fixed point. The trajectory must agree: no liftoff, not 60 cycles of period 1
+    let h = eq9_hopper(1e300, 41.86);
+    let run = h
+        .simulate(
+            Start::Flight {
+                height_m: 1.15,
+                velocity_mps: 0.0,
+            },
+            60,
+            &RunOptions::default(),
+        )
+        .unwrap();
+    assert_eq!(run.end, RunEnd::NoLiftoff);
+    assert!(run.cycles.is_empty());
+    // a merely heavy leg still hops: mu' = 1 halves the liftoff speed (eq. 7)
+    let run = eq9_hopper(1.0, 41.86)
+        .simulate(
+            Start::Flight {
+                height_m: 1.15,
+                velocity_mps: 0.0,
+            },
+            3,
+            &RunOptions::default(),
+        )
+        .unwrap();
+    let c = &run.cycles[0];
+    assert_eq!(c.liftoff.velocity_mps, 0.5 * c.liftoff_velocity_before_mps);
 }
 
 #[test]

@@ -246,3 +246,38 @@ fn a_long_run_shows_a_progress_bar_on_a_terminal() {
     let piped = dexter(&["run", &scene("line-juggler"), "--impacts", "20000"]);
     assert!(stderr(&piped).is_empty(), "{}", stderr(&piped));
 }
+
+/// Impact-timing jitter of sigma 1 s (clamped to 4 s) on the ideal mirror: the jittered
+/// paddle velocity sends the ball down at -3.9 m/s from a paddle moving up at 1.1 m/s, into
+/// the paddle. That is no impact at all: the run fails naming the key, where it used to go
+/// on and report a Zeno rest "on the table" of a scene with no table. The shipped 10 ms
+/// jitter stays physical.
+#[test]
+fn jitter_that_makes_an_impact_unphysical_fails_the_run_naming_the_key() {
+    let out = dexter(&[
+        "run",
+        &scene("line-juggler-ideal"),
+        "--set",
+        "jitter.sigma_s=1",
+        "--impacts",
+        "50",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.contains("unphysical impact") && err.contains("slower than the paddle"),
+        "{err}"
+    );
+    assert!(err.contains("jitter.sigma_s"), "{err}");
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("resting"));
+    for sigma in ["0.01", "0.05"] {
+        let v = json(&[
+            "run",
+            &scene("line-juggler-jitter"),
+            "--set",
+            &format!("jitter.sigma_s={sigma}"),
+            "--json",
+        ]);
+        assert_eq!(v["end"], "impacts", "sigma {sigma}: {v}");
+    }
+}

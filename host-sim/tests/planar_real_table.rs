@@ -8,8 +8,9 @@ use dexter_sim::controller::{ControllerError, Sil, StepController, StepOutput};
 use dexter_sim::model::planar::real_table::{
     controller_params_for, run_real_table, RealTable, TableGap, TableRunConfig,
 };
-use dexter_sim::model::planar::table_run::{run_ideal_table, TableRun, TableRunEnd};
+use dexter_sim::model::planar::table_run::{run_ideal_table, TableRun};
 use dexter_sim::model::planar::PlanarParams;
+use dexter_sim::model::planar::RunEnd;
 
 /// The sec. 2.3 triangle: rho 9.428 cm, l = 2/3 of 20 cm, e 0.5, kappa 1.1, kappa_E 0.165,
 /// 25 cm apex, dropped from 20 cm at theta 0.3; tips at atan 4.
@@ -55,10 +56,7 @@ fn perfect_sensing_and_drives_reproduce_the_papers_ideal_table() {
     let real = run_real(&p, perfect_table(), 300);
     let ideal = run_ideal_table(&p.build().unwrap(), p.start().unwrap(), 300, 1);
     let (r, i) = (&real.summary, &ideal.summary);
-    assert_eq!(
-        (r.end, i.end),
-        (TableRunEnd::Completed, TableRunEnd::Completed)
-    );
+    assert_eq!((r.end, i.end), (RunEnd::Completed, RunEnd::Completed));
     // same impacts, one by one, for the first flights (the tilt mode is neutrally stable:
     // f32 control and 2 ms periods make the two drift apart, by 1 ms at impact 15)
     for (a, b) in real.impacts.iter().zip(&ideal.impacts).take(10) {
@@ -114,7 +112,7 @@ fn realistic_triangle_stays_upright_300_impacts_with_energy_within_two_percent()
         }
         let run = run_real(&triangle(), table, 300);
         let s = &run.summary;
-        assert_eq!(s.end, TableRunEnd::Completed, "seed {seed}: {s:?}");
+        assert_eq!(s.end, RunEnd::Completed, "seed {seed}: {s:?}");
         assert!(!s.tipped_over && s.impacts == 300);
         assert!(
             s.late_energy_error.abs() < 0.02,
@@ -153,7 +151,7 @@ fn wrong_gains_lose_the_body() {
         ..triangle()
     };
     let s = run_real(&p, RealTable::realistic(1), 300).summary;
-    assert!(s.end != TableRunEnd::Completed, "kappa 0.8: {s:?}");
+    assert!(s.end != RunEnd::Completed, "kappa 0.8: {s:?}");
     let p = PlanarParams {
         kappa_e_s2pm2: 0.0,
         ..triangle()

@@ -3,6 +3,7 @@
 //! the system that claims its top-level tables ([`registry::claim`]) runs the verb. Nothing
 //! here knows a system by name.
 
+mod interrupt;
 pub mod registry;
 
 use crate::scene::SceneFile;
@@ -76,6 +77,12 @@ fn with_scene(
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let command = cli.command.unwrap_or_else(|| Command::Run(default_run()));
+    let (verb, scene) = match &command {
+        Command::Run(r) => ("run", &r.scene),
+        Command::Sweep(r) => ("sweep", &r.scene),
+        Command::Analyze(r) => ("analyze", &r.scene),
+    };
+    interrupt::install(format!("{verb} {}", scene.display()));
     let result = match command {
         Command::Run(req) => with_scene(&req.scene, |s, f| (s.run)(f, &req)),
         Command::Sweep(req) => with_scene(&req.scene, |s, f| (s.sweep)(f, &req)),
@@ -85,7 +92,10 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
-            eprintln!("error: {}", f.message);
+            // a closed stdout ends quietly; a failure to write stderr changes nothing
+            if !f.message.is_empty() {
+                crate::output::note(format_args!("error: {}", f.message));
+            }
             ExitCode::from(f.code)
         }
     }

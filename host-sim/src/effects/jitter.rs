@@ -9,6 +9,9 @@ use rand_distr::{Distribution, Normal};
 
 /// A source of impact-time offsets.
 pub trait Jitter {
+    /// False for [`NoJitter`]: an impact's command is then the surface's own, and what
+    /// checks the jittered command costs nothing.
+    const ON: bool = true;
     /// The offset of the next impact, s.
     fn offset_s(&mut self) -> f64;
 }
@@ -18,6 +21,7 @@ pub trait Jitter {
 pub struct NoJitter;
 
 impl Jitter for NoJitter {
+    const ON: bool = false;
     #[inline(always)]
     fn offset_s(&mut self) -> f64 {
         0.0

@@ -233,22 +233,14 @@ impl<const N: usize> Delay<N> for NoLatency<N> {
 }
 
 /// Most samples in flight (taken, not yet delivered) that a validator accepts (the line's
-/// `sensor.latency_s` x `sensor.rate_hz`, the hopper's likewise): the ring holds twice as
-/// many, so none is ever dropped for an accepted scene.
+/// `sensor.latency_s` x `sensor.rate_hz`, the hopper's likewise).
 pub const MAX_PENDING: usize = 4096;
 
-/// Ring slots for samples `latency_s` old at `rate_hz`: a power of two holding at least
-/// twice the samples in flight plus a few (at most `2 MAX_PENDING`).
-fn ring_slots(latency_s: f64, rate_hz: f64) -> usize {
-    let in_flight = (latency_s * rate_hz).ceil();
-    if in_flight.is_finite() && in_flight >= 0.0 && in_flight <= MAX_PENDING as f64 {
-        (2 * in_flight as usize + 8)
-            .next_power_of_two()
-            .min(2 * MAX_PENDING)
-    } else {
-        2 * MAX_PENDING
-    }
-}
+/// Slots of a [`Latency`] ring: twice [`MAX_PENDING`], a power of two. The ring has this
+/// size whatever the latency, so its mask is a constant and its index needs no bounds
+/// check (a sized ring's mask load and bounds checks cost 3 instructions a SIL step).
+const RING_SLOTS: usize = 2 * MAX_PENDING;
+const RING_MASK: u64 = RING_SLOTS as u64 - 1;
 
 /// Slack for the rounding of sample and control times, s.
 const TIME_SLACK_S: f64 = 1e-9;
@@ -262,10 +254,9 @@ const TIME_SLACK_S: f64 = 1e-9;
 pub struct Latency<const N: usize> {
     latency_s: f64,
     /// Samples taken and not yet delivered, (delivery time s, values), push `j` in slot
-    /// `j & mask`: a ring sized once for the latency (a power of two), so a push and a
-    /// delivery are an index and a mask (a `VecDeque` cost ~40 instructions a step).
-    pending: Box<[(f64, [f64; N])]>,
-    mask: u64,
+    /// `j & RING_MASK`, so a push and a delivery are an index and a mask (a `VecDeque`
+    /// cost ~40 instructions a step).
+    pending: Box<[(f64, [f64; N]); RING_SLOTS]>,
     /// Samples pushed.
     pushed: u64,
     /// Index of the oldest undelivered sample (`pushed` if none).
@@ -274,15 +265,17 @@ pub struct Latency<const N: usize> {
 }
 
 impl<const N: usize> Latency<N> {
-    /// A delay of `latency_s` (s, >= 0) for samples at `rate_hz` (> 0): the ring holds every
-    /// sample in flight up to [`MAX_PENDING`] (beyond, the oldest is dropped: a validated
-    /// scene never has that many).
-    pub fn new(latency_s: f64, rate_hz: f64) -> Self {
-        let slots = ring_slots(latency_s, rate_hz);
+    /// A delay of `latency_s` (s, >= 0). The ring holds the newest `2 MAX_PENDING`
+    /// samples: when more are waiting (samples much faster than control steps), the
+    /// oldest is dropped, which never drops the newest sample due, since at most
+    /// [`MAX_PENDING`] of them are still in flight for a validated scene.
+    pub fn new(latency_s: f64) -> Self {
         Self {
             latency_s,
-            pending: vec![(0.0, [0.0; N]); slots].into_boxed_slice(),
-            mask: slots as u64 - 1,
+            pending: vec![(0.0, [0.0; N]); RING_SLOTS]
+                .into_boxed_slice()
+                .try_into()
+                .expect("a ring of RING_SLOTS slots"),
             pushed: 0,
             delivered: 0,
             latest: None,
@@ -294,7 +287,7 @@ impl<const N: usize> Latency<N> {
     fn at(&self, index: u64) -> Sample<N> {
         Sample {
             seq: index as u32,
-            values: self.pending[(index & self.mask) as usize].1,
+            values: self.pending[(index & RING_MASK) as usize].1,
         }
     }
 }
@@ -306,10 +299,10 @@ impl<const N: usize> Delay<N> for Latency<N> {
             sample.seq, self.pushed as u32,
             "consecutive sequence numbers"
         );
-        if self.pushed - self.delivered > self.mask {
-            self.delivered += 1; // full (never, for a validated scene): drop the oldest
+        if self.pushed - self.delivered > RING_MASK {
+            self.delivered += 1; // full (samples far faster than frames): drop the oldest
         }
-        self.pending[(self.pushed & self.mask) as usize] = (t_s + self.latency_s, sample.values);
+        self.pending[(self.pushed & RING_MASK) as usize] = (t_s + self.latency_s, sample.values);
         self.pushed += 1;
     }
 
@@ -317,7 +310,7 @@ impl<const N: usize> Delay<N> for Latency<N> {
     fn latest(&mut self, t_s: f64) -> Option<Sample<N>> {
         // deliver everything due by now (with slack for the rounding of t)
         while self.delivered < self.pushed {
-            let (due, values) = self.pending[(self.delivered & self.mask) as usize];
+            let (due, values) = self.pending[(self.delivered & RING_MASK) as usize];
             if due > t_s + TIME_SLACK_S {
                 break;
             }
@@ -428,7 +421,7 @@ impl SampledSensor {
         Sampled::with(
             Periodic::new(rate_hz),
             Measured::new([sigma_m], [quantization_m], seed),
-            Latency::new(latency_s, rate_hz),
+            Latency::new(latency_s),
         )
     }
 }
@@ -523,6 +516,24 @@ mod tests {
             }
         }
         assert!(near_half < 10, "{near_half}");
+    }
+
+    #[test]
+    fn more_samples_than_the_ring_holds_between_frames_still_deliver_the_newest() {
+        // 20 000 samples (2.4 rings) between two frames, 1 ms latency at 1 MHz: the frame
+        // at t carries the newest sample taken at or before t - latency
+        let (rate, latency) = (1e6, 1e-3);
+        let mut s: Sampled<1, Periodic, Exact, Latency<1>> =
+            Sampled::with(Periodic::new(rate), Exact, Latency::new(latency));
+        for _ in 0..20_000 {
+            let t = s.next_sample_time_s();
+            s.take(t, [t]);
+        }
+        let now = 0.019_999_5;
+        let got = s.deliver(now, [0.0]).unwrap();
+        let newest_due = ((now - latency) * rate).floor();
+        assert_eq!(got.seq, newest_due as u32);
+        assert!((got.values[0] - newest_due / rate).abs() < 1e-15);
     }
 
     #[test]

@@ -394,15 +394,24 @@ impl<C: Wire> LockStep<C> {
     }
 }
 
-impl<C: Wire> StepController<C> for LockStep<C> {
-    fn step(&mut self, frame: &C::Frame) -> Result<StepOutput<C::Command>, ControllerError> {
-        let t0 = Instant::now();
+impl<C: Wire> LockStep<C> {
+    /// Send `frame` (through the fault injector if `corrupt`) and take the firmware's
+    /// answers to the segments it completes: the answer to the intact frame, else the last
+    /// answer (a safe command), else `None` (no delimiter reached the firmware).
+    fn send_frame(
+        &mut self,
+        frame: &C::Frame,
+        corrupt: bool,
+    ) -> Result<Option<StepOutput<C::Command>>, ControllerError> {
         let mut buf = [0u8; MAX_FRAME_LEN + 1];
         let n = encode(&HostMessage::Sensor(C::frame(*frame)), &mut buf)
             .map_err(|e| link_err(format!("cannot encode a {:?} frame: {e:?}", C::KIND)))?;
         buf[n] = 0; // flush delimiter: ends a partial frame left by a lost delimiter
         let mut out = [0u8; MAX_FRAME_LEN + 1];
-        let sent = self.inject.corrupt(&buf[..=n], &mut out);
+        let sent = match corrupt {
+            true => self.inject.corrupt(&buf[..=n], &mut out),
+            false => &buf[..=n],
+        };
         let mut segments = std::mem::take(&mut self.segments);
         segments.clear();
         self.inject
@@ -420,14 +429,44 @@ impl<C: Wire> StepController<C> for LockStep<C> {
             }
         }
         self.segments = segments;
-        let output = match answer.or(last) {
-            Some(out) => out,
-            None => {
+        Ok(answer.or(last))
+    }
+
+    /// The first frame reached the firmware without a delimiter, so there is no command to
+    /// hold yet. It is retried as any lost frame is when the next one arrives: a clean
+    /// delimiter ends its partial frame, which the firmware rejects and answers with its
+    /// safe command (the link timeout is due at once); if not one byte of it arrived, the
+    /// frame is sent again, uncorrupted.
+    fn retry_first_frame(
+        &mut self,
+        frame: &C::Frame,
+    ) -> Result<StepOutput<C::Command>, ControllerError> {
+        if self.inject.has_partial_frame() {
+            self.write(&[0])?;
+            let mut completed = None;
+            self.inject.segments(&[0], &[], |s| completed = Some(s));
+            if let Some(segment) = completed {
+                if let Some(got) = self.answer(segment, None)? {
+                    return Ok(got);
+                }
+            }
+        }
+        self.send_frame(frame, false)?
+            .ok_or_else(|| link_err("the first sensor frame was not answered, even sent again"))
+    }
+}
+
+impl<C: Wire> StepController<C> for LockStep<C> {
+    fn step(&mut self, frame: &C::Frame) -> Result<StepOutput<C::Command>, ControllerError> {
+        let t0 = Instant::now();
+        let output = match (self.send_frame(frame, true)?, self.last_output) {
+            (Some(out), _) => out,
+            (None, Some(held)) => {
                 // No delimiter reached the firmware: the previous command stays applied.
                 self.counters.link.unanswered_steps += 1;
-                self.last_output
-                    .ok_or_else(|| link_err("the first sensor frame was lost before any answer"))?
+                held
             }
+            (None, None) => self.retry_first_frame(frame)?,
         };
         self.last_output = Some(output);
         self.counters.steps += 1;

@@ -188,6 +188,31 @@ impl Drop for WorkDir {
     }
 }
 
+/// Every QEMU this process runs and has not yet waited for: its pid and working directory,
+/// for [`kill_all`].
+static RUNNING: Mutex<Vec<(u32, PathBuf)>> = Mutex::new(Vec::new());
+
+fn running() -> std::sync::MutexGuard<'static, Vec<(u32, PathBuf)>> {
+    RUNNING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Kill every QEMU this process runs (SIGKILL, by pid) and remove their working
+/// directories, for a signal handler about to exit; none is started or waited for after
+/// this (a pid is never killed after it was reaped). Returns how many were killed.
+pub fn kill_all() -> usize {
+    let list = running();
+    for (pid, dir) in list.iter() {
+        if let Ok(pid) = libc::pid_t::try_from(*pid) {
+            // SAFETY: kill(2) on a child this process has not reaped: no memory is touched
+            unsafe { libc::kill(pid, libc::SIGKILL) };
+        }
+        let _ = std::fs::remove_dir_all(dir);
+    }
+    let n = list.len();
+    std::mem::forget(list); // held until exit
+    n
+}
+
 /// A running QEMU: killed, waited for and its working directory removed when dropped.
 pub(super) struct Qemu {
     child: Child,
@@ -219,9 +244,12 @@ impl Qemu {
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped());
+        let mut list = running();
         let mut child = cmd
             .spawn()
             .map_err(|e| link_err(format!("cannot start {QEMU}: {e}")))?;
+        list.push((child.id(), workdir.path().to_path_buf()));
+        drop(list);
         let log = Arc::new(Mutex::new(Vec::new()));
         let stderr = Arc::new(Mutex::new(Vec::new()));
         let mut collectors = Vec::new();
@@ -246,7 +274,18 @@ impl Qemu {
 
     /// The exit status, if QEMU has exited.
     pub(super) fn exited(&mut self) -> Option<ExitStatus> {
-        self.child.try_wait().ok().flatten()
+        self.try_wait().ok().flatten()
+    }
+
+    /// `Child::try_wait`, and QEMU leaves [`RUNNING`] once it is reaped.
+    fn try_wait(&mut self) -> std::io::Result<Option<ExitStatus>> {
+        let mut list = running();
+        let status = self.child.try_wait();
+        if let Ok(Some(_)) = status {
+            let pid = self.child.id();
+            list.retain(|(p, _)| *p != pid);
+        }
+        status
     }
 
     /// A link error; if QEMU has exited, say so (with its status and stderr).
@@ -272,7 +311,7 @@ impl Qemu {
     pub(super) fn wait_success(&mut self, timeout: Duration) -> Result<(), ControllerError> {
         let deadline = Instant::now() + timeout;
         loop {
-            match self.child.try_wait() {
+            match self.try_wait() {
                 Ok(Some(status)) if status.success() => return Ok(()),
                 Ok(Some(status)) => {
                     return Err(link_err(format!(
@@ -301,8 +340,12 @@ impl Qemu {
 
 impl Drop for Qemu {
     fn drop(&mut self) {
+        let mut list = running();
         let _ = self.child.kill();
         let _ = self.child.wait();
+        let pid = self.child.id();
+        list.retain(|(p, _)| *p != pid);
+        drop(list);
         for t in self.collectors.drain(..) {
             let _ = t.join();
         }

@@ -23,6 +23,21 @@ pub enum Advance {
     RestForever,
     /// A safety cap on segments was hit before the requested time (the caller may continue).
     SegmentCap,
+    /// The last impact left the ball slower than the surface it leaves (only with jitter:
+    /// the jittered paddle velocity made the restitution law's result unphysical); the
+    /// run cannot go on ([`LinePlant::unphysical`] says how).
+    Unphysical,
+}
+
+/// An impact the jitter made unphysical: the ball left slower than the surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unphysical {
+    /// When, s.
+    pub time_s: f64,
+    /// The ball's velocity the law gave, m/s.
+    pub ball_velocity_mps: f64,
+    /// The surface's velocity at the contact, m/s.
+    pub surface_velocity_mps: f64,
 }
 
 /// A resting-contact episode.
@@ -65,6 +80,8 @@ pub struct LinePlant<F, S, J> {
     pub rest_count: u64,
     /// Grazing contacts (zero relative speed) so far.
     pub grazing_contacts: u64,
+    /// The impact that ended the run as [`Advance::Unphysical`], if one did.
+    pub unphysical: Option<Unphysical>,
     /// The last impact (meaningful once `impacts > 0`): built in place, so a caller that
     /// wants the last row reads it here instead of copying every row it is passed.
     pub last_row: ImpactRow,
@@ -98,6 +115,7 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
             rests: Vec::new(),
             rest_count: 0,
             grazing_contacts: 0,
+            unphysical: None,
             last_row: ImpactRow::default(),
         }
     }
@@ -179,6 +197,9 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
                         self.grazing_contacts += 1;
                     }
                     self.impact(on_impact);
+                    if J::ON && self.unphysical.is_some() {
+                        return Advance::Unphysical;
+                    }
                     segment_impacts += 1;
                     if !self.resting
                         && !self.surface.rest_is_final()
@@ -208,10 +229,18 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
         let g = self.gravity_mps2;
         let e = self.restitution;
         let before = self.ball;
-        let (rv, ra) = self.surface.at_impact(&before, g);
-        let rv = rv + ra * self.jitter.offset_s();
+        let (surface_v, ra) = self.surface.at_impact(&before, g);
+        let rv = surface_v + ra * self.jitter.offset_s();
         let paddle = self.surface.state(&before);
         let v_after = restitution_velocity(before.velocity_mps, rv, e);
+        if J::ON && v_after < surface_v {
+            // the ball would leave into the paddle: no physical impact does that
+            self.unphysical = Some(Unphysical {
+                time_s: self.time_s,
+                ball_velocity_mps: v_after,
+                surface_velocity_mps: surface_v,
+            });
+        }
         // the ball is on the paddle surface at a contact: remove rounding in the height
         self.ball = BallState::new(paddle.height_m, v_after);
         let relative = v_after - rv;

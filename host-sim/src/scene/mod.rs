@@ -9,7 +9,7 @@ mod file;
 mod set;
 
 pub use file::{deserialize, SceneFile};
-pub use set::{apply_set, parse_set, parse_sets};
+pub use set::{apply_set, check_key, parse_set, parse_sets, MAX_KEY_DEPTH};
 
 use std::fmt;
 

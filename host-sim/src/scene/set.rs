@@ -3,6 +3,28 @@
 
 use super::SceneError;
 
+/// Most levels a `--set` or `--range` key may have (`a.b.c` has 3). The deepest key of any
+/// shipped scene has 3; the limit keeps an absurd key (60 000 levels) from nesting tables so deep
+/// that building or reading them overflows the stack.
+pub const MAX_KEY_DEPTH: usize = 16;
+
+/// Check a dotted key's shape: no empty segment, at most [`MAX_KEY_DEPTH`] levels. A
+/// longer key is named by its first levels only.
+pub fn check_key(key: &str) -> Result<(), SceneError> {
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        return Err(SceneError::new(key, "empty key path segment"));
+    }
+    let depth = key.split('.').count();
+    if depth > MAX_KEY_DEPTH {
+        let head: Vec<&str> = key.split('.').take(3).collect();
+        return Err(SceneError::new(
+            format!("{}...", head.join(".")),
+            format!("the key has {depth} levels; a scene key has at most {MAX_KEY_DEPTH}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Parse `key.path=value`: the value is read as a TOML value (`0.5`, `true`, `"rk45"`),
 /// and taken as a bare string if it is not one (`rk45`).
 pub fn parse_set(arg: &str) -> Result<(String, toml::Value), SceneError> {
@@ -10,9 +32,7 @@ pub fn parse_set(arg: &str) -> Result<(String, toml::Value), SceneError> {
         .split_once('=')
         .ok_or_else(|| SceneError::new(arg, "expected key.path=value"))?;
     let key = key.trim();
-    if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err(SceneError::new(key, "empty key path segment"));
-    }
+    check_key(key)?;
     let raw = raw.trim();
     let value = match format!("v = {raw}").parse::<toml::Table>() {
         Ok(mut t) => t
@@ -29,7 +49,9 @@ pub fn parse_sets(args: &[String]) -> Result<Vec<(String, toml::Value)>, SceneEr
 }
 
 /// Set `key` (dotted) to `value` in `table`, creating intermediate tables.
+/// A key deeper than [`MAX_KEY_DEPTH`] is refused ([`check_key`]).
 pub fn apply_set(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), SceneError> {
+    check_key(key)?;
     let mut parts: Vec<&str> = key.split('.').collect();
     let last = parts
         .pop()
@@ -81,5 +103,21 @@ mod tests {
         assert_eq!(t["x"]["y"]["z"].as_integer(), Some(1));
         let err = apply_set(&mut t, "x.y.z.w", toml::Value::Integer(1)).unwrap_err();
         assert_eq!(err.key, "x.y.z");
+    }
+
+    #[test]
+    fn a_key_deeper_than_the_limit_is_refused_naming_the_limit() {
+        let key = |n: usize| vec!["a"; n].join(".");
+        assert!(parse_set(&format!("{}=1", key(MAX_KEY_DEPTH))).is_ok());
+        let mut t = toml::Table::new();
+        apply_set(&mut t, &key(MAX_KEY_DEPTH), toml::Value::Integer(1)).unwrap();
+        for n in [MAX_KEY_DEPTH + 1, 60_000] {
+            let e = parse_set(&format!("{}=1", key(n))).unwrap_err();
+            assert_eq!(e.key, "a.a.a...", "{e}");
+            assert!(e.reason.contains(&format!("{n} levels")), "{e}");
+            assert!(e.reason.contains("at most 16"), "{e}");
+            let e = apply_set(&mut toml::Table::new(), &key(n), toml::Value::Integer(1));
+            assert!(e.unwrap_err().reason.contains("at most 16"));
+        }
     }
 }

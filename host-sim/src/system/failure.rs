@@ -11,6 +11,9 @@ use std::fmt;
 pub const EXIT_SCENE: u8 = 2;
 /// Exit status for a failed run (controller, I/O).
 pub const EXIT_RUN: u8 = 1;
+/// Exit status when an output pipe's reader has gone (EPIPE): 128 + SIGPIPE, the status a
+/// shell reports for `ls | head`'s `ls`.
+pub const EXIT_BROKEN_PIPE: u8 = 141;
 
 /// A failed command: its exit status and what to tell the user.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,8 +69,20 @@ impl From<SceneError> for Failure {
 }
 
 impl From<OutputError> for Failure {
+    /// A failed run (exit 1); a closed pipe exits [`EXIT_BROKEN_PIPE`], silently if it was
+    /// standard output.
     fn from(e: OutputError) -> Self {
-        Failure::run(e)
+        match e.is_broken_pipe() {
+            true if e.path == std::path::Path::new(crate::output::STDOUT) => Self {
+                code: EXIT_BROKEN_PIPE,
+                message: String::new(),
+            },
+            true => Self {
+                code: EXIT_BROKEN_PIPE,
+                message: e.to_string(),
+            },
+            false => Failure::run(e),
+        }
     }
 }
 

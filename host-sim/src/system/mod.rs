@@ -15,7 +15,7 @@ mod sweep;
 pub mod target;
 
 pub use analyze::{Analyzes, Report};
-pub use failure::{Failure, EXIT_RUN, EXIT_SCENE};
+pub use failure::{Failure, EXIT_BROKEN_PIPE, EXIT_RUN, EXIT_SCENE};
 pub use length::RunLength;
 pub use sweep::{SweepBase, SweepReport, Sweeps};
 pub use target::{HilRequest, OnTarget, Target};

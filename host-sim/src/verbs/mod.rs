@@ -14,6 +14,7 @@ pub use analyze::analyze;
 pub use run::run;
 pub use sweep::{sweep, MAX_KEEP};
 
+use crate::output::print_stdout;
 use crate::system::{Failure, HilRequest};
 use clap::Args;
 use std::path::PathBuf;
@@ -99,16 +100,17 @@ pub struct AnalyzeRequest {
     pub plot: Option<PathBuf>,
 }
 
-/// Print a run's or an analysis' result: `text`, or `json` when asked.
+/// Print a run's or an analysis' result on stdout: `text`, or `json` when asked. A write
+/// error is returned (a closed pipe: [`crate::system::EXIT_BROKEN_PIPE`], silently; a full
+/// disk: exit 1), never a panic.
 pub fn print_result(
     json: bool,
     text: impl FnOnce() -> String,
     json_text: impl FnOnce() -> Result<String, String>,
 ) -> Result<(), Failure> {
-    if json {
-        println!("{}", json_text().map_err(Failure::run)?);
-    } else {
-        print!("{}", text());
-    }
-    Ok(())
+    let out = match json {
+        true => json_text().map_err(Failure::run)? + "\n",
+        false => text(),
+    };
+    Ok(print_stdout(&out)?)
 }

@@ -9,9 +9,9 @@
 
 use super::SweepRequest;
 use crate::grid::{map_ordered, Grid, Range};
-use crate::output::AtomicFile;
+use crate::output::{self, note, print_stderr, print_stdout, AtomicFile, Batch};
 use crate::progress;
-use crate::scene::{parse_sets, SceneFile};
+use crate::scene::{check_key, parse_sets, SceneFile};
 use crate::system::{unsupported, Failure, SweepBase, SweepReport, Sweeps};
 use std::io::Write;
 use std::path::Path;
@@ -19,50 +19,17 @@ use std::path::Path;
 /// Most late values a sweep keeps per point (`--keep`).
 pub const MAX_KEEP: usize = 100_000;
 
-/// Where the CSV goes.
-enum CsvOut {
-    File(AtomicFile),
-    Stdout(std::io::BufWriter<std::io::StdoutLock<'static>>),
-}
-
-impl CsvOut {
-    fn open(path: Option<&Path>) -> Result<Self, Failure> {
-        Ok(match path {
-            Some(p) => CsvOut::File(AtomicFile::create(p)?),
-            None => CsvOut::Stdout(std::io::BufWriter::new(std::io::stdout().lock())),
-        })
-    }
-    fn writer(&mut self) -> &mut dyn Write {
-        match self {
-            CsvOut::File(f) => f.writer(),
-            CsvOut::Stdout(w) => w,
-        }
-    }
-    fn error(&self, e: std::io::Error) -> Failure {
-        match self {
-            CsvOut::File(f) => f.error(e).into(),
-            CsvOut::Stdout(_) => Failure::run(format!("cannot write the CSV to stdout: {e}")),
-        }
-    }
-    fn finish(self) -> Result<(), Failure> {
-        match self {
-            CsvOut::File(f) => Ok(f.commit()?),
-            CsvOut::Stdout(mut w) => w
-                .flush()
-                .map_err(|e| Failure::run(format!("cannot write the CSV to stdout: {e}"))),
-        }
-    }
-}
-
 /// The grid of `req`'s ranges, checked against what `S` sweeps.
 fn grid<S: Sweeps>(req: &SweepRequest) -> Result<Grid, Failure> {
     let x = Range::parse(&req.range)?;
+    check_key(&x.key)?;
     S::check_key(&x.key)?;
     let y = match &req.range2 {
         None => None,
         Some(_) if !S::TWO_AXES => return Err(unsupported::<S>("--range2")),
         Some(r) => {
             let y = Range::parse(r)?;
+            check_key(&y.key)?;
             S::check_key(&y.key)?;
             Some(y)
         }
@@ -90,7 +57,9 @@ pub fn sweep<S: Sweeps>(file: &SceneFile, req: &SweepRequest) -> Result<(), Fail
         keep: req.keep,
     };
     let mut report = S::report(&base);
-    let mut csv = CsvOut::open(req.csv.as_deref())?;
+    // `--csv -` (or /dev/stdout) is the CSV on stdout, as without `--csv`
+    let csv_file = req.csv.as_deref().filter(|p| !output::is_stdout(p));
+    let mut csv = AtomicFile::create(csv_file.unwrap_or(Path::new("-")))?;
     let bar = progress::bar(base.grid.len() as u64, "points", true);
     let swept = map_ordered(
         base.grid.len(),
@@ -117,16 +86,23 @@ pub fn sweep<S: Sweeps>(file: &SceneFile, req: &SweepRequest) -> Result<(), Fail
     );
     bar.finish_and_clear();
     swept?;
-    csv.finish()?;
-    let summary = report.summary(req.csv.as_deref())?;
-    match req.csv {
-        Some(_) => print!("{summary}"),
-        None => eprint!("{summary}"),
+    // the CSV file and the plot appear together, and only if the whole sweep succeeds
+    let batch = Batch::begin();
+    csv.commit()?;
+    let summary = report.summary(csv_file)?;
+    let written = match &req.plot {
+        Some(dir) => report.plot(dir)?,
+        None => Vec::new(),
+    };
+    // the summary before the renames: a sweep whose summary cannot be printed fails, and
+    // writes nothing
+    match csv_file {
+        Some(_) => print_stdout(&summary)?,
+        None => print_stderr(&summary),
     }
-    if let Some(dir) = &req.plot {
-        for f in report.plot(dir)? {
-            eprintln!("wrote {}", f.display());
-        }
+    batch.commit()?;
+    for f in written {
+        note(format_args!("wrote {}", f.display()));
     }
     Ok(())
 }

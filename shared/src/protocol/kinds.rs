@@ -274,6 +274,37 @@ macro_rules! wire {
     };
 }
 
+/// Calls `$callback!` with every controller kind, in wire order: its name (the variant of
+/// [`Kind`], [`Config`], [`Frame`] and [`Command`]), its controller type and, after `if`, the
+/// cargo feature a firmware image enables to host it (none: every image hosts it). The
+/// firmware's `Hosted` enum and its dispatch are generated from this list
+/// (`firmware/src/hosted.rs`), so an image can host only kinds named here, in this order.
+///
+/// The feature predicates are evaluated in the crate that expands the callback. For example
+/// `for_each_kind!(hosted)` expands to
+///
+/// ```ignore
+/// hosted! {
+///     Line($crate::control::Controller),
+///     Echo($crate::echo::Echo),
+///     Tilt($crate::tilt_control::TiltController) if feature = "tilt",
+///     Hop($crate::hop_control::HopController) if feature = "hop",
+///     Arm($crate::arm_control::ArmController) if feature = "arm",
+/// }
+/// ```
+#[macro_export]
+macro_rules! for_each_kind {
+    ($callback:ident) => {
+        $callback! {
+            Line($crate::control::Controller),
+            Echo($crate::echo::Echo),
+            Tilt($crate::tilt_control::TiltController) if feature = "tilt",
+            Hop($crate::hop_control::HopController) if feature = "hop",
+            Arm($crate::arm_control::ArmController) if feature = "arm",
+        }
+    };
+}
+
 wire!(Controller => Line);
 wire!(Echo => Echo);
 // Every sine/cosine backend of the tilt controller is the Tilt kind: the firmware's

@@ -22,7 +22,9 @@
 //!    [`Kind::ALL`], [`Config`], [`Frame`] and [`Command`] (the position is the wire tag:
 //!    append only), an arm to each `match` there (the compiler lists the ones missing), and
 //!    a line `wire!(path::Controller => Name);` for its [`Wire`] impl.
-//! 3. Add `Name(path::Controller)` to the firmware's hosted list (`firmware/src/hosted.rs`).
+//! 3. Append `Name(path::Controller) if feature = "name"` to [`for_each_kind!`](crate::for_each_kind)
+//!    in the same file, and the feature `name` to `firmware/Cargo.toml`: the firmware's
+//!    hosted controllers (`firmware/src/hosted.rs`) are generated from that list.
 //!
 //! `shared/tests/protocol_props.rs` then checks that every message of the new kind fits
 //! [`MAX_PAYLOAD_LEN`] (worst case over every value) and round-trips; the HIL driver

@@ -15,14 +15,16 @@
 //! | [`planner`] | design vector, sec. 2.2 constraints, shooting seeds, SLSQP / ALM |
 //! | [`simulate`] | the event-driven verifier and its verdicts |
 //! | [`closed_loop`] | the plan tracked by the core's `ArmController` (SIL), then verified |
-//! | [`summary`] | plan + verify + margin check + tracking in one call; the JSON summary |
-//! | [`examples`] | the four shipped scenes as text |
 //!
 //! # For a system module
 //!
+//! Plan, verify, margin check and tracking in one call, with the JSON summary, are the
+//! system's (`crate::systems::arm::execute`):
+//!
 //! ```no_run
-//! use dexter_sim::model::arm::{params::ArmConfig, summary::{run, RunOptions}};
-//! let text = dexter_sim::model::arm::examples::THROW;
+//! use dexter_sim::model::arm::params::ArmConfig;
+//! use dexter_sim::systems::arm::execute::{run, RunOptions};
+//! let text = dexter_sim::systems::arm::examples::THROW;
 //! let sys = ArmConfig::from_toml_str(text)?.validate()?; // errors name the dotted key
 //! let summary = run(&sys, RunOptions { track: true })?;    // plan, verify, 0.95 mu, SIL
 //! println!("{}", serde_json::to_string(&summary).unwrap()); // task, mu_required, executed, ...
@@ -47,13 +49,11 @@
 
 pub mod closed_loop;
 pub mod contact;
-pub mod examples;
 pub mod geometry;
 pub mod motion;
 pub mod params;
 pub mod planner;
 pub mod simulate;
-pub mod summary;
 pub mod task;
 
 use contact::{ArmInertia, Placement, Rig};

@@ -293,13 +293,6 @@ fn relation(param: &'static str, requirement: &'static str) -> ArmError {
 }
 
 impl ArmConfig {
-    /// Parse a scene's text; unknown keys and wrong types are errors naming the key path.
-    pub fn from_toml_str(text: &str) -> Result<Self, ArmError> {
-        let de = toml::Deserializer::parse(text).map_err(|e| ArmError::Toml(e.to_string()))?;
-        serde_path_to_error::deserialize(de)
-            .map_err(|e| ArmError::Toml(format!("{}: {}", e.path(), e.inner())))
-    }
-
     /// The validated system; errors name the key at fault.
     pub fn validate(&self) -> Result<ArmScene, ArmError> {
         let (arm, bounds, g) = self.arm.validate()?;

@@ -194,8 +194,9 @@ impl Start {
 pub enum RunEnd {
     /// All requested cycles were simulated.
     Completed,
-    /// The body turned back down before the leg was extended, or nothing drives it out of
-    /// the bottom (eq. 9 with no thrust, tau = 0): no liftoff (the hopper stalls on the
+    /// The body turned back down before the leg was extended, nothing drives it out of
+    /// the bottom (eq. 9 with no thrust, tau = 0), or it leaves the stance with no speed
+    /// (no energy, or a hop height that underflows): no liftoff (the hopper stalls on the
     /// ground; the cycle is not recorded).
     NoLiftoff,
     /// The energy servo asked for a thrust tau_n <= g in a model whose thrust phase has no
@@ -204,10 +205,9 @@ pub enum RunEnd {
     WeakThrust,
     /// An integrator hit [`MAX_STEPS_PER_PHASE`] (full model only).
     StepCap,
-    /// A state, or a requested time, became non-finite (e.g. the decompression time from
-    /// a bottom deeper than chi_l e^-745, where x_n underflows to 0); the cycle is not
-    /// recorded. Map-only runs ([`RunOptions::times`] off) continue through such bottoms:
-    /// eq. 9 keeps E_n exact and x_n = 0 is its correctly rounded value.
+    /// A state, or a requested time, became non-finite; the cycle is not recorded. (A
+    /// bottom deeper than chi_l e^-745, where x_n underflows to 0, keeps E_n exact; its
+    /// liftoff speed is then 0 too, which ends the run as [`RunEnd::NoLiftoff`].)
     NonFinite,
 }
 
@@ -598,6 +598,12 @@ impl Hopper {
         *steps += st.steps;
         let v_before = st.liftoff.velocity_mps.max(0.0);
         let v = v_before * (1.0 / (1.0 + self.model.leg_mass_ratio())); // eq. 7
+        if v * v / (2.0 * g) == 0.0 {
+            // no flight: the liftoff speed is 0 (a touchdown with no energy, e.g. a start
+            // at rest at chi_l, E = 0 being eq. 19's fixed point), or so small (a huge leg
+            // mass ratio mu') that the hop height underflows: the body stays on its leg
+            return Err(RunEnd::NoLiftoff);
+        }
         let liftoff = HopEvent {
             velocity_mps: v,
             ..st.liftoff

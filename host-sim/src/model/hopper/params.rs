@@ -144,22 +144,7 @@ fn default_tolerance() -> f64 {
     1e-10
 }
 
-/// A scene file for the hopper: only a `[hopper]` table.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct HopperScene {
-    hopper: HopperParams,
-}
-
 impl HopperParams {
-    /// Parse a scene's text (a TOML document holding only `[hopper]`); unknown keys are
-    /// errors. Does not validate values: see [`HopperParams::build`].
-    pub fn from_toml_str(text: &str) -> Result<Self, HopperError> {
-        toml::from_str::<HopperScene>(text)
-            .map(|s| s.hopper)
-            .map_err(|e| HopperError::Toml(e.to_string()))
-    }
-
     /// The validated hopper (errors name the key, e.g. `hopper.spring_eta1 must be > 0`).
     pub fn build(&self) -> Result<Hopper, HopperError> {
         let g = self.gravity_mps2;

@@ -99,7 +99,7 @@ impl SampledCamera {
         Sampled::with(
             Periodic::new(config.rate_hz),
             Measured::new([m, m, rad], [qm, qm, qrad], config.seed),
-            Latency::new(config.latency_s, config.rate_hz),
+            Latency::new(config.latency_s),
         )
     }
 }

@@ -287,7 +287,8 @@ pub enum RunEnd {
     Completed,
     /// |theta| reached the tip angle at an impact.
     TippedOver,
-    /// After an impact the contact point does not move away from the table (no flight).
+    /// After an impact the contact point does not move away from the table (no flight),
+    /// or (the real table) impacts pile up within one control period.
     NoSeparation,
     /// No contact before the gap's horizon (the body never comes back to the table).
     NoContact,

@@ -51,10 +51,8 @@
 
 use super::camera::{Camera, CameraConfig, PerfectCamera, SampledCamera};
 use super::contact::{first_root, Contact, ContactError};
-use super::table_run::{
-    RunCounters, StepSample, SummaryBuilder, TableImpact, TableKind, TableRun, TableRunEnd,
-};
-use super::{Body, PlanarError, PlanarModel, PlanarState, TableCommand};
+use super::table_run::{RunCounters, StepSample, SummaryBuilder, TableImpact, TableKind, TableRun};
+use super::{Body, PlanarError, PlanarModel, PlanarState, RunEnd, TableCommand};
 use crate::closed_loop::{drive, SampledPlant};
 use crate::controller::{ControllerError, StepController};
 use crate::effects::actuator::{Actuator, IdealActuator, SecondOrderActuator};
@@ -70,7 +68,7 @@ use std::ops::ControlFlow;
 /// Most plant segments in one control period (each ends at a drive switch, a camera
 /// sample, an impact or the period's end).
 pub const MAX_SEGMENTS_PER_STEP: usize = 4096;
-/// Most impacts in one control period before the run ends as [`TableRunEnd::NoSeparation`]
+/// Most impacts in one control period before the run ends as [`RunEnd::NoSeparation`]
 /// (the body is resting on the table).
 pub const MAX_IMPACTS_PER_STEP: usize = 64;
 /// Most step samples a run keeps.
@@ -140,7 +138,7 @@ pub struct RealTable {
     pub initial_tilt_rad: f64,
     /// Pivot height at t = 0, m (at rest).
     pub initial_height_m: f64,
-    /// The run ends ([`TableRunEnd::TimeLimit`]) after this simulated time, s.
+    /// The run ends ([`RunEnd::TimeLimit`]) after this simulated time, s.
     pub max_duration_s: f64,
 }
 
@@ -263,7 +261,7 @@ impl TableSink for Vec<TableImpact> {
 /// in SIL and HIL); the effects
 /// switched off in `table` cost nothing (the loop is compiled per combination). `Err` only
 /// if the controller fails (a link error in HIL); everything the plant does ends the run
-/// with a [`TableRunEnd`]. The result holds every impact ([`stream_real_table`] keeps none).
+/// with a [`RunEnd`]. The result holds every impact ([`stream_real_table`] keeps none).
 pub fn run_real_table<T: SinCos>(
     cfg: &TableRunConfig,
     table: &RealTable,
@@ -415,13 +413,13 @@ impl<A: Actuator, B: Actuator> Plant<A, B> {
     }
 
     /// The impact at the current state; `Err` ends the run.
-    fn impact(&mut self, index: usize) -> Result<TableImpact, TableRunEnd> {
+    fn impact(&mut self, index: usize) -> Result<TableImpact, RunEnd> {
         let before = self.body;
         if !(before.theta_rad.is_finite() && before.y_dot_mps.is_finite()) {
-            return Err(TableRunEnd::NonFinite);
+            return Err(RunEnd::NonFinite);
         }
         if before.theta_rad.abs() >= self.model.tip_angle_rad {
-            return Err(TableRunEnd::TippedOver);
+            return Err(RunEnd::TippedOver);
         }
         let alpha = self.tilt.height_m;
         let omega = self.tilt.velocity_mps;
@@ -437,15 +435,15 @@ impl<A: Actuator, B: Actuator> Plant<A, B> {
             velocity_mps: v_surface,
         };
         let (after, _) = self.model.collide(&before, &cmd).map_err(|e| match e {
-            super::impact::ImpactError::Jam => TableRunEnd::Jam,
-            super::impact::ImpactError::Cap => TableRunEnd::NonFinite,
+            super::impact::ImpactError::Jam => RunEnd::Jam,
+            super::impact::ImpactError::Cap => RunEnd::NonFinite,
         })?;
         // the contact point must leave the table
         let vc = after.body_state().contact_velocity(self.l);
         let (sa, ca) = alpha.sin_cos();
         let rel = -sa * (vc[0] - v_surface[0]) + ca * (vc[1] - v_surface[1]);
         if rel.is_nan() || rel <= 0.0 {
-            return Err(TableRunEnd::NoSeparation);
+            return Err(RunEnd::NoSeparation);
         }
         self.body = after;
         // the pivot stays under the centre of mass: its horizontal velocity follows the
@@ -480,7 +478,7 @@ impl<A: Actuator, B: Actuator> Plant<A, B> {
         next_index: usize,
         max_impacts: usize,
         on_impact: &mut impl FnMut(TableImpact),
-    ) -> Result<(), TableRunEnd> {
+    ) -> Result<(), RunEnd> {
         let mut index = next_index;
         let mut in_step = 0usize;
         for _ in 0..MAX_SEGMENTS_PER_STEP {
@@ -512,8 +510,8 @@ impl<A: Actuator, B: Actuator> Plant<A, B> {
                 l: self.l,
             };
             let found = gap.first_contact(h).map_err(|e| match e {
-                ContactError::NonFinite => TableRunEnd::NonFinite,
-                ContactError::Cap(_) => TableRunEnd::SearchCap,
+                ContactError::NonFinite => RunEnd::NonFinite,
+                ContactError::Cap(_) => RunEnd::SearchCap,
             })?;
             match found {
                 Some(c) if c.time_s <= h => {
@@ -527,7 +525,7 @@ impl<A: Actuator, B: Actuator> Plant<A, B> {
                         return Ok(());
                     }
                     if in_step >= MAX_IMPACTS_PER_STEP {
-                        return Err(TableRunEnd::NoSeparation);
+                        return Err(RunEnd::NoSeparation);
                     }
                 }
                 _ => {
@@ -543,7 +541,7 @@ impl<A: Actuator, B: Actuator> Plant<A, B> {
                 }
             }
         }
-        Err(TableRunEnd::NoContact)
+        Err(RunEnd::NoContact)
     }
 }
 
@@ -609,8 +607,8 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
         let driven = drive(ctrl, &mut self, dt, max_steps)?;
         let end = match driven.end {
             Some(e) => e,
-            None if self.summary.impacts() >= self.cfg.impacts => TableRunEnd::Completed,
-            None => TableRunEnd::TimeLimit,
+            None if self.summary.impacts() >= self.cfg.impacts => RunEnd::Completed,
+            None => RunEnd::TimeLimit,
         };
         self.counters.sim_time_s = self.plant.time_s;
         self.counters.control_steps = driven.safe.steps;
@@ -672,7 +670,7 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
     }
 
     /// Advance the plant to `t_next`, stopping at camera sample times to take them.
-    fn advance_step(&mut self, t_next: f64) -> Result<(), TableRunEnd> {
+    fn advance_step(&mut self, t_next: f64) -> Result<(), RunEnd> {
         for _ in 0..MAX_SEGMENTS_PER_STEP {
             let ts = self.camera.next_sample_time_s();
             if ts <= self.plant.time_s {
@@ -695,18 +693,18 @@ impl<'a, C: Camera, A: Actuator, B: Actuator> Loop<'a, C, A, B> {
                 return Ok(());
             }
         }
-        Err(TableRunEnd::NoContact)
+        Err(RunEnd::NoContact)
     }
 }
 
 impl<T: SinCos, C: Camera, A: Actuator, B: Actuator> SampledPlant<TiltControllerWith<T>>
     for Loop<'_, C, A, B>
 {
-    type End = TableRunEnd;
+    type End = RunEnd;
     type Error = ControllerError;
 
-    fn done(&self) -> Option<TableRunEnd> {
-        (self.summary.impacts() >= self.cfg.impacts).then_some(TableRunEnd::Completed)
+    fn done(&self) -> Option<RunEnd> {
+        (self.summary.impacts() >= self.cfg.impacts).then_some(RunEnd::Completed)
     }
 
     fn frame(&mut self, k: u64, t_k: f64) -> TiltFrame {
@@ -734,11 +732,7 @@ impl<T: SinCos, C: Camera, A: Actuator, B: Actuator> SampledPlant<TiltController
         ];
     }
 
-    fn advance(
-        &mut self,
-        _k: u64,
-        t_next: f64,
-    ) -> Result<ControlFlow<TableRunEnd>, ControllerError> {
+    fn advance(&mut self, _k: u64, t_next: f64) -> Result<ControlFlow<RunEnd>, ControllerError> {
         Ok(match self.advance_step(t_next) {
             Ok(()) => ControlFlow::Continue(()),
             Err(e) => ControlFlow::Break(e),

@@ -22,60 +22,6 @@ pub enum TableKind {
     Real,
 }
 
-/// Why a run ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum TableRunEnd {
-    /// All requested impacts happened.
-    Completed,
-    /// |theta| reached the tip angle at an impact.
-    TippedOver,
-    /// After an impact the contact point does not leave the table (no flight), or impacts
-    /// pile up within one control period.
-    NoSeparation,
-    /// No contact before the gap's horizon.
-    NoContact,
-    /// The contact search hit one of its iteration caps (an internal limit: the run is
-    /// cut short, and says so).
-    SearchCap,
-    /// Painlevé jam in a frictional impact.
-    Jam,
-    /// A state became non-finite.
-    NonFinite,
-    /// The run's time limit passed before the requested impacts.
-    TimeLimit,
-}
-
-impl From<RunEnd> for TableRunEnd {
-    fn from(e: RunEnd) -> Self {
-        match e {
-            RunEnd::Completed => TableRunEnd::Completed,
-            RunEnd::TippedOver => TableRunEnd::TippedOver,
-            RunEnd::NoSeparation => TableRunEnd::NoSeparation,
-            RunEnd::NoContact => TableRunEnd::NoContact,
-            RunEnd::SearchCap => TableRunEnd::SearchCap,
-            RunEnd::Jam => TableRunEnd::Jam,
-            RunEnd::NonFinite => TableRunEnd::NonFinite,
-            RunEnd::TimeLimit => TableRunEnd::TimeLimit,
-        }
-    }
-}
-
-impl From<TableRunEnd> for RunEnd {
-    fn from(e: TableRunEnd) -> Self {
-        match e {
-            TableRunEnd::Completed => RunEnd::Completed,
-            TableRunEnd::TippedOver => RunEnd::TippedOver,
-            TableRunEnd::NoSeparation => RunEnd::NoSeparation,
-            TableRunEnd::NoContact => RunEnd::NoContact,
-            TableRunEnd::SearchCap => RunEnd::SearchCap,
-            TableRunEnd::Jam => RunEnd::Jam,
-            TableRunEnd::NonFinite => RunEnd::NonFinite,
-            TableRunEnd::TimeLimit => RunEnd::TimeLimit,
-        }
-    }
-}
-
 /// One impact.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct TableImpact {
@@ -131,7 +77,7 @@ pub struct TableSummary {
     /// Impacts that happened.
     pub impacts: usize,
     /// Why the run ended.
-    pub end: TableRunEnd,
+    pub end: RunEnd,
     /// True if the run ended by tipping over.
     pub tipped_over: bool,
     /// True if all requested impacts happened.
@@ -268,7 +214,7 @@ impl SummaryBuilder {
         &self,
         table: TableKind,
         model: &PlanarModel,
-        end: TableRunEnd,
+        end: RunEnd,
         counters: &RunCounters,
     ) -> TableSummary {
         let eta_star = model.feedback.target_energy_jpkg();
@@ -286,8 +232,8 @@ impl SummaryBuilder {
             table,
             impacts: n,
             end,
-            tipped_over: end == TableRunEnd::TippedOver,
-            stayed_up: end == TableRunEnd::Completed,
+            tipped_over: end == RunEnd::TippedOver,
+            stayed_up: end == RunEnd::Completed,
             target_energy_jpkg: eta_star,
             late_window_impacts: late,
             late_mean_energy_jpkg: late_mean,
@@ -311,7 +257,7 @@ pub fn summarize(
     table: TableKind,
     model: &PlanarModel,
     impacts: &[TableImpact],
-    end: TableRunEnd,
+    end: RunEnd,
     counters: &RunCounters,
 ) -> TableSummary {
     let mut b = SummaryBuilder::new(impacts.len());
@@ -353,7 +299,7 @@ pub fn run_ideal_table(
         sim_time_s: records.last().map_or(0.0, |r| r.time_s),
         ..RunCounters::default()
     };
-    let summary = summarize(TableKind::Ideal, model, &records, run.end.into(), &counters);
+    let summary = summarize(TableKind::Ideal, model, &records, run.end, &counters);
     TableRun {
         summary,
         impacts: records,

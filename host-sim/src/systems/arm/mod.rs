@@ -10,17 +10,20 @@
 //! (only `[task]` is required); the system claims a scene with `[arm]` or `[task]`, and
 //! any other top-level table is an error naming it.
 
+pub mod examples;
+pub mod execute;
 pub mod plots;
+pub mod scene;
 pub mod summary;
 pub mod trace;
 
+use self::execute::run_with;
 use self::summary::{compare_trajectories, ArmOutcome};
 use self::trace::ArmRow;
 use crate::controller::StepController;
 use crate::model::arm::closed_loop::{sil_controller, track_sil};
 use crate::model::arm::params::ArmConfig;
 use crate::model::arm::planner::{plan, Plan};
-use crate::model::arm::summary::run_with;
 use crate::model::arm::{ArmError, ArmScene};
 use crate::scene::{deserialize, SceneError, SceneFile};
 use crate::system::{Failure, RunLength, Setup, System};

@@ -7,13 +7,13 @@
 //! Everything drawn comes from the outcome, whose size is bounded by the run's simulated
 //! time (at most a few tens of seconds; `docs/arm.md`); rows are not kept.
 
+use super::execute::MARGIN_FACTOR;
 use super::summary::ArmOutcome;
 use super::trace::{phase_name, ArmRow};
 use super::{ArmRunConfig, ArmSystem};
 use crate::filmstrip::{filmstrip, Frame, Ink, Shape, MAX_FRAMES};
 use crate::model::arm::geometry::V2;
 use crate::model::arm::simulate;
-use crate::model::arm::summary::MARGIN_FACTOR;
 use crate::plot::Chart;
 use crate::system::Failure;
 use crate::system::Plots;

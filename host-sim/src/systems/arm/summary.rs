@@ -3,12 +3,12 @@
 //! trajectory compared with SIL's bit for bit; as text or one JSON object (keys in
 //! `docs/arm.md`, "Output").
 
+use super::execute::ArmSummary;
 use super::trace::phase_name;
 use super::ArmRunConfig;
 use crate::controller::HilReport;
 use crate::model::arm::closed_loop::TrackedMotion;
 use crate::model::arm::simulate::{Executed, GoalError};
-use crate::model::arm::summary::ArmSummary;
 use crate::model::arm::Solver;
 use crate::output::{json_text, JsonStyle};
 use crate::stream::Decimator;

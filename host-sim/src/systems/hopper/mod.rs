@@ -17,6 +17,7 @@ pub mod analyze;
 pub mod closed_forms;
 pub mod plots;
 pub mod sampled;
+pub mod scene;
 pub mod summary;
 pub mod sweep;
 pub mod trace;

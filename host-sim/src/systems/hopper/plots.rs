@@ -72,7 +72,7 @@ impl Plots<HopperSystem> for HopperPlots {
         let xs = Dots::of(&labels, self.starts.iter().map(|p| &p.x));
         match return_map(cfg, cf, xs) {
             Some(chart) => written.extend(chart.draw(dir, &format!("{}-return-map", cfg.name))?),
-            None => eprintln!("warning: fewer than two cycles, no return map plotted"),
+            None => crate::output::note("warning: fewer than two cycles, no return map plotted"),
         }
         let es = Dots::of(&labels, self.starts.iter().map(|p| &p.e));
         if let Some(chart) = energy_map(cfg, cf, es) {

@@ -74,6 +74,7 @@ pub(super) fn free_run<F: Flight, S: Surface, J: Jitter>(
             Advance::SegmentCap => {}
             Advance::RestForever => break End::Resting,
             Advance::Reached => break End::Duration,
+            Advance::Unphysical => return Err(unphysical(&plant)),
         }
         pb.update([plant.impacts as f64, plant.time_s]);
     };
@@ -88,6 +89,25 @@ fn stalled<F: Flight, S: Surface, J: Jitter>(plant: &LinePlant<F, S, J>, why: &s
     RunError::Stalled(format!(
         "{why} at t = {} s after {} impacts",
         plant.time_s, plant.impacts
+    ))
+}
+
+/// The error of a plant whose last impact the jitter made unphysical.
+fn unphysical<F: Flight, S: Surface, J: Jitter>(plant: &LinePlant<F, S, J>) -> RunError {
+    let what = match plant.unphysical {
+        Some(u) => format!(
+            "at t = {:.6} s (impact {}) the ball would leave at {:.4} m/s, slower than the \
+             paddle at {:.4} m/s, so it would pass into it",
+            u.time_s, plant.impacts, u.ball_velocity_mps, u.surface_velocity_mps
+        ),
+        None => format!(
+            "at t = {} s the ball would pass into the paddle",
+            plant.time_s
+        ),
+    };
+    RunError::Unphysical(format!(
+        "{what}: the jittered paddle velocity made the restitution law's result unphysical \
+         (jitter.sigma_s is too large for this paddle's acceleration; lower it)"
     ))
 }
 
@@ -107,6 +127,7 @@ fn advance_stretch<F: Flight, S: Surface, J: Jitter>(
     for _ in 0..MAX_SEGMENT_CAPS {
         match plant.advance_to(target_s, total, &mut |r| rec.push(r)) {
             Advance::SegmentCap => continue,
+            Advance::Unphysical => return Err(unphysical(plant)),
             adv => return Ok(adv == Advance::ImpactLimit),
         }
     }

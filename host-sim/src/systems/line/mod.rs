@@ -32,7 +32,7 @@ pub mod sweep;
 pub mod trace;
 pub mod validate;
 
-use self::run::{run_streaming, RunOptions};
+use self::run::{run_streaming, End, RunOptions};
 use self::scene::{ControlMode, Scene};
 use self::summary::Summary;
 use self::trace::ImpactRow;
@@ -69,6 +69,12 @@ impl Outcome for LineOutcome {
     }
     fn safe_steps(&self) -> Option<&SafeSteps> {
         (self.summary.control_steps > 0).then_some(&self.summary.safe)
+    }
+    fn shortfall(&self) -> Option<String> {
+        (self.summary.end == End::Diverged).then(|| {
+            "diverged: the apex or the ball's state is not finite (a command overflowed)"
+                .to_string()
+        })
     }
 }
 

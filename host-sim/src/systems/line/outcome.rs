@@ -35,6 +35,9 @@ pub enum RunError {
     /// The plant stopped advancing before the run's end (an internal cap was hit: the run
     /// fails rather than end early).
     Stalled(String),
+    /// An impact left the ball slower than the paddle (the jitter made the restitution
+    /// law's command unphysical): the run cannot go on.
+    Unphysical(String),
 }
 
 impl std::fmt::Display for RunError {
@@ -43,6 +46,7 @@ impl std::fmt::Display for RunError {
             RunError::Scene(e) => write!(f, "scene error: {e}"),
             RunError::Controller(e) => write!(f, "{e}"),
             RunError::Stalled(e) => write!(f, "the simulation stalled: {e}"),
+            RunError::Unphysical(e) => write!(f, "unphysical impact: {e}"),
         }
     }
 }
@@ -58,6 +62,22 @@ pub enum End {
     Duration,
     /// The ball came to rest on a fixed table: no impact will follow.
     Resting,
+    /// The run diverged: the last apex or the ball's state is not finite (a law's command
+    /// overflowed); the run fails (exit 1) after its summary.
+    Diverged,
+}
+
+impl RunOutcome {
+    /// End the run as [`End::Diverged`] if its last apex or the ball's final state is not
+    /// finite. Checked once, at the end: a ball past 1e154 m/s never comes back within a
+    /// run's time limit, so the per-impact path pays nothing for it.
+    pub(super) fn check_finite(&mut self) {
+        let ball = [self.final_ball.height_m, self.final_ball.velocity_mps];
+        let apex = self.apexes.last().unwrap_or(0.0);
+        if !(apex.is_finite() && ball.iter().all(|v| v.is_finite())) {
+            self.end = End::Diverged;
+        }
+    }
 }
 
 impl std::error::Error for RunError {}

@@ -28,6 +28,7 @@ pub fn run_streaming(
     }
     let mut rec = Recorder::new(scene, options.record_rows, on_impact);
     super::assemble::run(scene, options, controller, &mut rec)?;
+    rec.out.check_finite();
     Ok(rec.out)
 }
 

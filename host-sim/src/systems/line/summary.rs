@@ -24,7 +24,8 @@ pub struct Summary {
     pub wall_time_s: f64,
     /// Target apex h*, m (null for a passive scene).
     pub target_apex_m: Option<f64>,
-    /// Apex after the last impact, m (null without impacts).
+    /// Apex after the last impact, m (null without impacts, or if it is not finite: the
+    /// run diverged).
     pub final_apex_m: Option<f64>,
     /// Impacts after which every apex stayed within `analysis.converge_tolerance` of the
     /// target (null if it never settled there, or did for fewer than 5 impacts).
@@ -45,7 +46,7 @@ pub struct Summary {
     /// Grazing contacts (zero relative speed).
     pub grazing_contacts: u64,
     /// Which limit ended the run: `impacts` (the requested impacts), `duration` (the time
-    /// limit) or `resting` (the ball rests on a fixed table).
+    /// limit), `resting` (the ball rests on a fixed table) or `diverged` (not finite).
     pub end: End,
     /// Control steps answered in the controller's safe state (`safe_steps`), and by fault
     /// (`faults`: fault name to count).
@@ -70,7 +71,7 @@ impl Summary {
             sim_time_s: out.sim_time_s,
             wall_time_s: out.wall_time_s,
             target_apex_m: target,
-            final_apex_m: out.apexes.last(),
+            final_apex_m: out.apexes.last().filter(|a| a.is_finite()),
             converged_after_impacts: out.apexes.converged_after(),
             period: if out.resting_at_end {
                 None
@@ -94,6 +95,7 @@ impl Summary {
             End::Impacts => "at the requested impacts",
             End::Duration => "at the time limit (stop.duration_s)",
             End::Resting => "resting on the table (no impact follows)",
+            End::Diverged => "diverged: the apex or the ball's state is not finite",
         }
     }
 
@@ -108,7 +110,13 @@ impl Summary {
         let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.6} m"));
         s += &format!("scene            {}\n", self.scene);
         s += &format!("target apex      {}\n", opt(self.target_apex_m));
-        s += &format!("final apex       {}\n", opt(self.final_apex_m));
+        s += &format!(
+            "final apex       {}\n",
+            match self.end {
+                End::Diverged => "not finite (diverged)".to_string(),
+                _ => opt(self.final_apex_m),
+            }
+        );
         s += &format!(
             "converged (1 %)  {}\n",
             match (self.target_apex_m, self.converged_after_impacts) {

@@ -3,7 +3,8 @@
 //! `control.kappa1_s2pm2`). CSV: `KEY,period,end,apex_height_m`, one row per kept apex:
 //! the period the run's apexes settled to (empty if not settled: still converging near a
 //! doubling, or aperiodic; see the summary's `period`) and which limit ended the run
-//! (`impacts`, `duration`: the time limit cut it short, `resting`).
+//! (`impacts`, `duration`: the time limit cut it short, `resting`, `diverged`: one row with
+//! no apex, since a diverged run's apexes are not finite).
 
 use super::run::{run_streaming, End, RunError, RunOptions};
 use super::scene::Scene;
@@ -51,6 +52,7 @@ fn end_name(e: End) -> &'static str {
         End::Impacts => "impacts",
         End::Duration => "duration",
         End::Resting => "resting",
+        End::Diverged => "diverged",
     }
 }
 
@@ -122,6 +124,10 @@ impl SweepReport<LineSystem> for LineSweepReport {
     ) -> std::io::Result<()> {
         let period = p.period.map_or(String::new(), |q| q.to_string());
         let end = end_name(p.end);
+        if p.end == End::Diverged {
+            // one row, no apexes: a diverged run's are not finite
+            return writeln!(w, "{},{period},{end},", Sig17(x));
+        }
         for &a in &p.apexes {
             writeln!(w, "{},{period},{end},{}", Sig17(x), Sig17(a))?;
         }
@@ -129,7 +135,7 @@ impl SweepReport<LineSystem> for LineSweepReport {
     }
 
     fn add(&mut self, x: f64, _: Option<f64>, p: LatePoint) {
-        for a in p.apexes {
+        for a in p.apexes.into_iter().filter(|a| a.is_finite()) {
             self.points.push((x, a));
         }
     }

@@ -8,7 +8,7 @@ use super::film::FilmKeeper;
 use super::summary::{summarize, HilFields, RealFigures};
 use super::trace::PlanarRow;
 use super::{PlanarConfig, PlanarOutcome};
-use crate::controller::{SafeSteps, Sil, StepController};
+use crate::controller::{Paced, SafeSteps, Sil, StepController};
 use crate::model::planar::impact::FrictionMode;
 use crate::model::planar::real_table::{stream_real_table, RealTable, TableRunConfig, TableSink};
 use crate::model::planar::stats::RunStats;
@@ -17,20 +17,18 @@ use crate::model::planar::{ContactLaw, ImpactRecord, Streamed, TableCommand};
 use crate::progress::Progress;
 use crate::system::{Failure, Setup};
 use dexter_core::tilt_control::TiltController;
+use std::cell::Cell;
 use std::time::Instant;
 
-/// Impacts between progress updates.
-const PROGRESS_EVERY: usize = 64;
-
 /// Where the streamed run's impacts and steps go: the run statistics, the rows (trace and
-/// plots), the filmstrip, the progress bar.
+/// plots), the filmstrip, the impacts so far (for the progress bar).
 struct Streams<'a> {
     stats: RunStats,
     rows: &'a mut dyn FnMut(&PlanarRow),
     film: Option<FilmKeeper>,
     l_m: f64,
     mode: FrictionMode,
-    bar: Progress,
+    impacts: &'a Cell<u64>,
 }
 
 impl TableSink for Streams<'_> {
@@ -56,9 +54,7 @@ impl TableSink for Streams<'_> {
         if let Some(f) = self.film.as_mut() {
             f.impact(r);
         }
-        if r.index.is_multiple_of(PROGRESS_EVERY) {
-            self.bar.update([r.index as f64]);
-        }
+        self.impacts.set(r.index as u64 + 1);
     }
 
     fn step(&mut self, s: &StepSample) {
@@ -109,6 +105,15 @@ pub(super) fn run_real(
             &mut sil
         }
     };
+    // the bar moves with simulated time too: a body that rests makes no impacts
+    let limits = [
+        (p.impacts as f64, "impacts"),
+        (table.max_duration_s, "s simulated"),
+    ];
+    let impacts = Cell::new(0);
+    let bar = Progress::new(limits, setup.progress);
+    let dt_s = f64::from(table.controller.dt_s);
+    let mut paced = Paced::new(inner, bar, &impacts, dt_s);
     let run_cfg = TableRunConfig {
         model: cfg.model,
         start: cfg.start,
@@ -124,14 +129,14 @@ pub(super) fn run_real(
             ContactLaw::Frictionless => FrictionMode::Frictionless,
             ContactLaw::Coulomb { .. } => FrictionMode::Sliding,
         },
-        bar: Progress::new([(p.impacts as f64, "impacts")], setup.progress),
+        impacts: &impacts,
     };
-    let run = stream_real_table(&run_cfg, table, inner, &mut streams)
+    let run = stream_real_table(&run_cfg, table, &mut paced, &mut streams)
         .map_err(|e| Failure::run(e.to_string()))?;
-    streams.bar.finish();
+    paced.finish();
     let t = &run.summary;
     let done = Streamed {
-        end: t.end.into(),
+        end: t.end,
         impacts: t.impacts,
         gap_evaluations: 0,
     };

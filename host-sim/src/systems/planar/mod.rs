@@ -14,6 +14,7 @@ pub mod closed_loop;
 pub mod film;
 pub mod plots;
 pub mod real;
+pub mod scene;
 pub mod summary;
 pub mod sweep;
 pub mod trace;

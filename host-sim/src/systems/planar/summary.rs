@@ -240,17 +240,21 @@ pub(super) fn summary_text(s: &RunSummary) -> String {
     }
     let _ = writeln!(
         o,
-        "  energy:       eta* {:.5} J/kg; first impact {:.5} J/kg; late mean (last {} impacts) {:.5} J/kg ({:+.2} % of eta*)",
+        "  energy:       eta* {:.5} J/kg; first impact {}; late mean (last {} impacts) {}",
         s.target_energy_jpkg,
-        s.first_energy_jpkg,
+        or_none(s.first_energy_jpkg, |v| format!("{v:.5} J/kg")),
         s.late_window_impacts,
-        s.late_mean_energy_jpkg,
-        100.0 * s.late_mean_energy_rel_error
+        or_none(s.late_mean_energy_jpkg, |v| format!(
+            "{v:.5} J/kg ({:+.2} % of eta*)",
+            100.0 * s.late_mean_energy_rel_error
+        )),
     );
     let _ = writeln!(
         o,
-        "  theta:        max |theta| {:.4} rad (late {:.4} rad), mean {:+.4} rad",
-        s.max_abs_theta_rad, s.late_max_abs_theta_rad, s.mean_theta_rad
+        "  theta:        max |theta| {:.4} rad (late {:.4} rad), mean {}",
+        s.max_abs_theta_rad,
+        s.late_max_abs_theta_rad,
+        or_none(s.mean_theta_rad, |v| format!("{v:+.4} rad"))
     );
     let _ = writeln!(o, "  class:        {}", class_words(s.class));
     if let Some(r) = &s.real {
@@ -264,6 +268,15 @@ pub(super) fn summary_text(s: &RunSummary) -> String {
         s.gap_evaluations
     );
     o
+}
+
+/// `v` written by `f`, or "none" for a statistic with no samples (NaN: no impacts).
+fn or_none(v: f64, f: impl Fn(f64) -> String) -> String {
+    if v.is_finite() {
+        f(v)
+    } else {
+        "none".to_string()
+    }
 }
 
 /// The HIL figures of a run (every key null in SIL, where nothing ran on a target).

@@ -617,8 +617,7 @@ fn with_delay<C: Clock, M: Measure<3>>(
     let s = &cfg.sensor;
     let h = s.body_height;
     if s.latency_s > 0.0 {
-        let rate = s.rate_hz.unwrap_or(1.0 / cfg.dt_s());
-        let delay = Latency::new(s.latency_s, rate);
+        let delay = Latency::new(s.latency_s);
         stepped(cfg, ctrl, sink, HopSensor::new(clock, measure, delay, h))
     } else {
         let delay = NoLatency::default();

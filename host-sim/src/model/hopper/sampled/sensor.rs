@@ -165,7 +165,7 @@ mod tests {
         let mut s = HopSensor::new(
             AtControlSteps::default(),
             measured(0.0, 0.0, 1e-3, 1),
-            Latency::new(2.5e-3, 1e3),
+            Latency::new(2.5e-3),
             false,
         );
         let mut last = None;

@@ -22,12 +22,13 @@ pub mod trace;
 use self::scene::{has_control, scene_error, SampledHopperConfig};
 use self::summary::SampledOutcome;
 use self::trace::SampledRow;
-use crate::controller::{Sil, StepController};
+use crate::controller::{Paced, Sil, StepController};
 use crate::model::hopper::sampled::{run_sampled_with, SampledError, MAX_CYCLES};
 use crate::progress::Progress;
 use crate::scene::{SceneError, SceneFile};
 use crate::system::{Failure, RunLength, Setup, System};
 use dexter_core::hop_control::{HopController, HopParams};
+use std::cell::Cell;
 use std::time::Instant;
 
 /// The sampled hopper: `[hopper]` scenes with a `[hopper.control]` table.
@@ -77,16 +78,21 @@ impl System for SampledHopperSystem {
                 &mut sil
             }
         };
-        let mut bar = Progress::new([(sampled.cycles as f64, "cycles")], setup.progress);
+        // the bar moves with simulated time too: a stalled hopper completes no cycle
+        let limits = [
+            (sampled.cycles as f64, "cycles"),
+            (sampled.max_steps() as f64 * sampled.dt_s(), "s simulated"),
+        ];
+        let cycles = Cell::new(0);
+        let bar = Progress::new(limits, setup.progress);
+        let mut paced = Paced::new(inner, bar, &cycles, sampled.dt_s());
         let wall = Instant::now();
-        let run = run_sampled_with(&sampled, inner, &mut |c| {
+        let run = run_sampled_with(&sampled, &mut paced, &mut |c| {
             rows(&SampledRow(*c));
-            if c.index % 16 == 0 {
-                bar.update([c.index as f64]);
-            }
+            cycles.set(c.index as u64 + 1);
         })
         .map_err(failure)?;
-        bar.finish();
+        paced.finish();
         Ok(SampledOutcome::new(cfg, run, wall.elapsed().as_secs_f64()))
     }
 }

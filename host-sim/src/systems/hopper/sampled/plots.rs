@@ -57,8 +57,8 @@ impl Plots<SampledHopperSystem> for SampledPlots {
     ) -> Result<Vec<PathBuf>, Failure> {
         let rows = &out.run.timeline;
         if rows.is_empty() {
-            eprintln!(
-                "warning: the run completed none of the timeline's hops, no timeline plotted"
+            crate::output::note(
+                "warning: the run completed none of the timeline's hops, no timeline plotted",
             );
             return Ok(Vec::new());
         }

@@ -118,6 +118,7 @@ impl SampledOutcome {
                 "{p} (hop heights within {:.1e} over the last hops)",
                 s.spread
             ),
+            None if !s.spread.is_finite() => "not settled (too few hops to tell)".to_string(),
             None => format!(
                 "not settled (largest spread of a phase {:.3e}, relative)",
                 s.spread

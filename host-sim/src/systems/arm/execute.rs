@@ -1,4 +1,4 @@
-//! One call for a system module: plan, verify, check the friction margin, optionally
+//! The arm system's run in one call: plan, verify, check the friction margin, optionally
 //! track on the core, and return a serializable summary with what the plots need.
 //!
 //! JSON keys (`docs/arm.md`): `task`, `phases`, `mu_required`, `planner_iterations`,
@@ -8,18 +8,18 @@
 //! the plots need (trajectory samples, friction over time, filmstrip frames, the arm's
 //! outline) is kept in the summary but left out of its JSON.
 
-use super::closed_loop::{sil_controller, track, TrackedMotion, TrackingReport};
-use super::contact::Joint;
-use super::geometry::V2;
-use super::motion::ArmMotion;
-use super::planner::evaluate::PlanSample;
-use super::planner::{plan, PhaseSpan, Plan};
-use super::simulate::{
+use crate::controller::StepController;
+use crate::model::arm::closed_loop::{sil_controller, track, TrackedMotion, TrackingReport};
+use crate::model::arm::contact::Joint;
+use crate::model::arm::geometry::V2;
+use crate::model::arm::motion::ArmMotion;
+use crate::model::arm::planner::evaluate::PlanSample;
+use crate::model::arm::planner::{plan, PhaseSpan, Plan};
+use crate::model::arm::simulate::{
     execute_observed, execute_with, Event, Executed, Execution, Frame, FrictionSample, GoalError,
     Sample, SimOptions,
 };
-use super::{ArmError, ArmScene, Solver};
-use crate::controller::StepController;
+use crate::model::arm::{ArmError, ArmScene, Solver};
 use dexter_core::arm_control::ArmController;
 use serde::Serialize;
 
