@@ -81,6 +81,7 @@ pub fn main() -> ExitCode {
         Command::Run(r) => ("run", &r.scene),
         Command::Sweep(r) => ("sweep", &r.scene),
         Command::Analyze(r) => ("analyze", &r.scene),
+        Command::Basin(r) => ("basin", &r.scene),
     };
     interrupt::install(format!("{verb} {}", scene.display()));
     let result = match command {
