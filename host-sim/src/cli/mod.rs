@@ -8,6 +8,7 @@ pub mod registry;
 
 use crate::scene::SceneFile;
 use crate::system::Failure;
+use crate::verbs::basin::BasinRequest;
 use crate::verbs::{AnalyzeRequest, RunRequest, SweepRequest};
 use clap::{Parser, Subcommand};
 use registry::{claim, Entry};
@@ -33,6 +34,8 @@ enum Command {
     Sweep(SweepRequest),
     /// Linearize a scene's return map at its fixed point: eigenvalues or slope, verdict.
     Analyze(AnalyzeRequest),
+    /// Run every point of a two-key grid to its end and classify it (basin map).
+    Basin(BasinRequest),
 }
 
 /// Where the default run finds `scenes/line-juggler.toml` and writes `out/`: the current
@@ -78,12 +81,14 @@ pub fn main() -> ExitCode {
         Command::Run(r) => ("run", &r.scene),
         Command::Sweep(r) => ("sweep", &r.scene),
         Command::Analyze(r) => ("analyze", &r.scene),
+        Command::Basin(r) => ("basin", &r.scene),
     };
     interrupt::install(format!("{verb} {}", scene.display()));
     let result = match command {
         Command::Run(req) => with_scene(&req.scene, |s, f| (s.run)(f, &req)),
         Command::Sweep(req) => with_scene(&req.scene, |s, f| (s.sweep)(f, &req)),
         Command::Analyze(req) => with_scene(&req.scene, |s, f| (s.analyze)(f, &req)),
+        Command::Basin(req) => with_scene(&req.scene, |s, f| (s.basin)(f, &req)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -2,8 +2,10 @@
 //! claim a scene ([`SYSTEMS`]), and the verbs each runs. Adding a system is one line here.
 
 use crate::scene::SceneFile;
+use crate::system::basin::Basins;
 use crate::system::{unsupported, Analyzes, Failure, Sweeps, System};
 use crate::systems::{arm, feeder, hopper, line, planar, planar_juggler};
+use crate::verbs::basin::BasinRequest;
 use crate::verbs::{self, AnalyzeRequest, RunRequest, SweepRequest};
 
 /// One verb of one system on a scene.
@@ -22,6 +24,8 @@ pub struct Entry {
     pub sweep: Verb<SweepRequest>,
     /// `dexter analyze` (refused for a system without an analysis).
     pub analyze: Verb<AnalyzeRequest>,
+    /// `dexter basin` (refused for a system that does not classify its runs).
+    pub basin: Verb<BasinRequest>,
 }
 
 impl Entry {
@@ -33,6 +37,7 @@ impl Entry {
             run: verbs::run::<S>,
             sweep: no_sweep::<S>,
             analyze: no_analysis::<S>,
+            basin: no_basin::<S>,
         }
     }
 
@@ -51,6 +56,19 @@ impl Entry {
             ..self
         }
     }
+
+    /// The same entry, drawing basin maps ([`Basins`]).
+    pub const fn basins<S: Basins>(self) -> Self {
+        Self {
+            basin: verbs::basin::basin::<S>,
+            ..self
+        }
+    }
+}
+
+/// `basin` refused for system `S` (exit 2).
+fn no_basin<S: System>(_: &SceneFile, _: &BasinRequest) -> Result<(), Failure> {
+    Err(unsupported::<S>("basin"))
 }
 
 /// `sweep` refused for system `S` (exit 2).
@@ -76,7 +94,10 @@ pub static SYSTEMS: [Entry; 7] = [
     Entry::of::<planar::PlanarSystem>()
         .sweeps::<planar::PlanarSystem>()
         .analyzes::<planar::PlanarSystem>(),
-    Entry::of::<line::LineSystem>().sweeps::<line::LineSystem>(),
+    Entry::of::<line::LineSystem>()
+        .sweeps::<line::LineSystem>()
+        .analyzes::<line::LineSystem>()
+        .basins::<line::LineSystem>(),
 ];
 
 /// The system that runs a scene with these top-level tables.

@@ -8,6 +8,7 @@ pub mod flight;
 pub mod locate;
 pub mod ode;
 pub mod roots;
+pub mod unimodal;
 pub mod zeno;
 
 pub use flight::{Ballistic, Flight, FlightEnd, Poly};

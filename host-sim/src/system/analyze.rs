@@ -10,6 +10,11 @@ pub trait Report {
     fn text(&self) -> String;
     /// One JSON object.
     fn json(&self) -> Result<String, String>;
+    /// Draw the analysis' pictures into `dir` (`--plot`); refused (exit 2) by default.
+    fn plot(&self, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, Failure> {
+        let _ = dir;
+        Err(Failure::usage("--plot: this analysis has no pictures"))
+    }
 }
 
 /// A system with an analysis of its own (linearization, closed forms).

@@ -8,6 +8,7 @@
 //! registry (`crate::cli`) use them. Nothing here names a system.
 
 mod analyze;
+pub mod basin;
 mod failure;
 mod length;
 mod sweep;

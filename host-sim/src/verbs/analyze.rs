@@ -10,5 +10,11 @@ pub fn analyze<S: Analyzes>(file: &SceneFile, req: &AnalyzeRequest) -> Result<()
     let table = file.table_with(&parse_sets(&req.sets)?)?;
     let cfg = S::parse(file, table)?;
     let report = S::analyze(file, &cfg)?;
-    print_result(req.json, || report.text(), || report.json())
+    print_result(req.json, || report.text(), || report.json())?;
+    if let Some(dir) = &req.plot {
+        for f in report.plot(dir)? {
+            eprintln!("wrote {}", f.display());
+        }
+    }
+    Ok(())
 }

@@ -6,6 +6,7 @@
 //! status 2 and a message naming the option ([`crate::system::Failure`]).
 
 mod analyze;
+pub mod basin;
 mod run;
 mod sweep;
 
@@ -94,6 +95,9 @@ pub struct AnalyzeRequest {
     /// Print one JSON object instead of the human report.
     #[arg(long)]
     pub json: bool,
+    /// Write the analysis' pictures into this directory (where the system draws them).
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Print a run's or an analysis' result on stdout: `text`, or `json` when asked. A write

@@ -46,6 +46,11 @@ impl Eq17 {
         }
     }
 
+    /// (β, ψ_t, ψ̇_t): the damping parameter and eq. 25's normalized thrust vector (m/s).
+    pub fn thrust_vector(&self) -> (f64, f64, f64) {
+        (self.beta, self.psi, self.psi_dot)
+    }
+
     /// The smallest E where eq. 17 applies (the thrust ends in stance: sqrt(E) > psi_t).
     pub fn domain_start(&self) -> f64 {
         self.psi * self.psi

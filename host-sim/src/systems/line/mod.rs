@@ -18,8 +18,10 @@
 //!
 //! It runs every scene that no other system claims (the registry asks it last).
 
+pub mod analyze;
 pub mod apexes;
 pub mod assemble;
+pub mod basin;
 pub mod loops;
 pub mod outcome;
 pub mod plots;
@@ -37,7 +39,7 @@ use self::trace::ImpactRow;
 use crate::controller::{HilReport, SafeSteps, StepController};
 use crate::output::{json_text, JsonStyle};
 use crate::scene::{SceneError, SceneFile};
-use crate::system::{Failure, Outcome, RunLength, Setup, System};
+use crate::system::{Analyzes, Failure, Outcome, Report, RunLength, Setup, System};
 use dexter_core::control::{Controller, ControllerParams};
 
 /// The line system.
@@ -146,5 +148,12 @@ impl System for LineSystem {
             phase: out.phase,
             gravity_mps2: cfg.physics.gravity_mps2,
         })
+    }
+}
+
+impl Analyzes for LineSystem {
+    fn analyze<'a>(file: &'a SceneFile, cfg: &'a Scene) -> Result<Box<dyn Report + 'a>, Failure> {
+        let _ = file;
+        Ok(Box::new(analyze::analyze(cfg)?))
     }
 }
