@@ -19,8 +19,11 @@ pub const MAX_CONTROL_RATE_HZ: f64 = 10_000.0;
 pub const MAX_CAMERA_RATE_HZ: f64 = 100_000.0;
 /// Longest `real_table.max_duration_s`, s (a bound on a run's control steps).
 pub const MAX_DURATION_S: f64 = 86_400.0;
-/// Longest camera latency, s.
-pub const MAX_LATENCY_S: f64 = 1.0;
+/// Longest camera latency, s (excluded): the core's estimator compensates less than 0.1 s
+/// (`dexter_core::tilt_control::FlightTuning`).
+pub const MAX_LATENCY_S: f64 = 0.1;
+/// The core's longest plan freeze before an impact, s (`TiltParams::commit_s`, <= 0.2).
+pub const MAX_COMMIT_S: f32 = 0.2;
 
 /// Whether the drives obey their limits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -237,7 +240,15 @@ impl CameraTable {
         check(&k("rate_hz"), self.rate_hz, 0.0, MAX_CAMERA_RATE_HZ, true)?;
         check(&k("noise_m"), self.noise_m, 0.0, 1.0, false)?;
         check(&k("noise_rad"), self.noise_rad, 0.0, 1.0, false)?;
-        check(&k("latency_s"), self.latency_s, 0.0, MAX_LATENCY_S, false)?;
+        let latency = self.latency_s;
+        if !(latency.is_finite() && latency >= 0.0 && (latency as f32) < MAX_LATENCY_S as f32) {
+            return Err(SceneError::new(
+                k("latency_s"),
+                format!(
+                    "must be in [0, {MAX_LATENCY_S}) s (the controller predicts across less than {MAX_LATENCY_S} s of delay), got {latency}"
+                ),
+            ));
+        }
         check(&k("quantization_m"), self.quantization_m, 0.0, 1.0, false)?;
         check(
             &k("quantization_rad"),
@@ -309,7 +320,8 @@ impl RealTableScene {
         )?;
         let (tilt, stroke) = (self.tilt.limits()?, self.stroke.limits()?);
         let camera = self.camera.config(p.seed)?;
-        let base = self.controller_base(&tilt, &stroke);
+        let mut base = self.controller_base(&tilt, &stroke);
+        base.commit_s = self.commit_s(camera.as_ref())?;
         let controller = controller_params_for(model, &base, camera.as_ref())
             .map_err(|e| SceneError::new("real_table", e.to_string()))?;
         let limited = self.drives == Drives::Limited;
@@ -326,6 +338,38 @@ impl RealTableScene {
             .validate(model)
             .map_err(|e| SceneError::new("real_table", e.to_string()))?;
         Ok(table)
+    }
+
+    /// The controller's plan freeze, `commit_s`, derived from the keys the user sets: the
+    /// core's 0.03 s default, or more when the camera's latency plus a planning cycle
+    /// (`contact_iterations` + 7 periods) plus one period needs more (then one period more
+    /// than that), at most [`MAX_COMMIT_S`]. Where even that is too short the error names
+    /// `real_table.control_rate_hz` with the lowest rate that fits.
+    fn commit_s(&self, camera: Option<&CameraConfig>) -> Result<f32, SceneError> {
+        let latency = camera.map_or(0.0, |c| c.latency_s as f32);
+        let dt = (1.0 / self.control_rate_hz) as f32;
+        let probe = TiltParams {
+            contact_iterations: self.contact_iterations,
+            ..TiltParams::default()
+        };
+        let periods = probe.cycle_periods() + 1;
+        // the core's own sum (`TiltParams::validate`), f32
+        let due = latency + f32::from(periods - 1) * dt + dt;
+        let commit = TiltParams::default()
+            .commit_s
+            .max(due + dt)
+            .min(MAX_COMMIT_S);
+        if commit > due {
+            return Ok(commit);
+        }
+        let lowest_hz = f64::from(periods) / (f64::from(MAX_COMMIT_S) - f64::from(latency));
+        Err(SceneError::new(
+            "real_table.control_rate_hz",
+            format!(
+                "must be above {lowest_hz:.2} Hz with real_table.camera.latency_s = {latency} s and real_table.contact_iterations = {}: the controller freezes its plan at most {MAX_COMMIT_S} s before an impact, and later than the latency plus contact_iterations + 8 control periods; got {}",
+                self.contact_iterations, self.control_rate_hz
+            ),
+        ))
     }
 
     /// The controller's parameters apart from the model's laws: rate, damping, Newton
