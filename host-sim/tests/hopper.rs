@@ -475,7 +475,9 @@ fn a_zero_height_hop_is_no_liftoff_in_every_model() {
         height_m: chi_l,
         velocity_mps: 0.0,
     };
-    let run = h.simulate(at_rest(0.5), 50, &RunOptions::default()).unwrap();
+    let run = h
+        .simulate(at_rest(0.5), 50, &RunOptions::default())
+        .unwrap();
     assert_eq!(run.end, RunEnd::NoLiftoff);
     assert!(run.cycles.is_empty());
     // the zero hop repels (alpha > 1): a 1e-9 m hop grows to the period-1 orbit x* = chi_l/alpha
@@ -504,7 +506,9 @@ fn a_zero_height_hop_is_no_liftoff_in_every_model() {
         FullNonlinear::new(0.5, 5.81, 2.33, 0.0, 10.0, Integrator::rk4(1e-4).unwrap()).unwrap();
     let hf = Hopper::new(HopperModel::Full(full), raibert(41.86, 0.01)).unwrap();
     for (hop, chi_l) in [(hl, 0.0), (hf, 0.5)] {
-        let run = hop.simulate(at_rest(chi_l), 20, &RunOptions::default()).unwrap();
+        let run = hop
+            .simulate(at_rest(chi_l), 20, &RunOptions::default())
+            .unwrap();
         assert_eq!(run.end, RunEnd::NoLiftoff);
         assert!(run.cycles.is_empty());
     }

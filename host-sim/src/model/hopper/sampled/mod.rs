@@ -65,6 +65,9 @@ pub const MAX_CYCLE_RECORDS: usize = 1_000_000;
 /// Apex heights reported as `late_apex_heights_m`.
 pub const LATE_APEXES: usize = 8;
 
+/// Relative rounding of the control period to f32 (half an ulp, with room).
+const PERIOD_ROUNDING: f64 = f32::EPSILON as f64;
+
 /// Slack for comparing sample and control times, s.
 const TIME_SLACK_S: f64 = 1e-12;
 
@@ -297,6 +300,18 @@ fn control_error(e: ParamError) -> SampledError {
     param(key, format!("is invalid ({e})"))
 }
 
+/// The longest time whose control steps of `dt_s` are at most [`MAX_STEPS`]: the default
+/// `max_time_s` at a fast rate. It is computed from the controller's own (f32) period, so
+/// that `time / dt_s` never rounds past the cap ([`SampledConfig::validate`]).
+pub fn longest_time_s(dt_s: f64) -> f64 {
+    let cap = MAX_STEPS as f64;
+    let mut t = cap * dt_s;
+    while t / dt_s > cap {
+        t = t.next_down();
+    }
+    t
+}
+
 impl SampledConfig {
     /// A configuration with the controller's parameters from `law` ([`controller_params`]),
     /// `cycles` hops from an apex at `start_height_m`, at most 60 s per requested cycle plus
@@ -312,13 +327,14 @@ impl SampledConfig {
         cycles: usize,
     ) -> Result<Self, SampledError> {
         let control = controller_params(&model, law, rate_hz, &sensor, detector)?;
+        let dt_s = f64::from(control.dt_s);
         Ok(Self {
             model,
             start_height_m,
             control,
             sensor,
             cycles,
-            max_time_s: (10.0 + 60.0 * cycles as f64).min(MAX_STEPS as f64 / rate_hz),
+            max_time_s: (10.0 + 60.0 * cycles as f64).min(longest_time_s(dt_s)),
             settle_tolerance: 1e-3,
             compare_exact: true,
             record_cycles: false,
@@ -332,6 +348,7 @@ impl SampledConfig {
     }
 
     /// Control steps the run may take at most.
+    #[inline]
     pub fn max_steps(&self) -> u64 {
         (self.max_time_s / self.dt_s()).ceil() as u64
     }
@@ -401,7 +418,9 @@ impl SampledConfig {
         if !(rate.is_finite() && rate > 0.0) {
             return Err(param("hopper.sensor.rate_hz", "must be a number > 0"));
         }
-        if rate > MAX_SENSOR_RATE_RATIO * rate_c * (1.0 + 1e-9) {
+        // rate_c is 1 / the f32 period, within f32's rounding of the scene's rate (whose
+        // exact limit the scene checks, `check_control`): allow that rounding here
+        if rate > MAX_SENSOR_RATE_RATIO * rate_c * (1.0 + PERIOD_ROUNDING) {
             return Err(param(
                 "hopper.sensor.rate_hz",
                 format!("must be <= {MAX_SENSOR_RATE_RATIO} x hopper.control.rate_hz"),
