@@ -133,6 +133,19 @@ pub enum Failure {
     },
 }
 
+impl std::fmt::Display for Failure {
+    /// The failure in words, with its time in ms.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (what, t_s) = match *self {
+            Self::OffBelt { t_s } => ("the part left the belt over its right edge", t_s),
+            Self::PastPivot { t_s } => ("the part crossed the line through the pivot", t_s),
+            Self::OffFenceTip { t_s } => ("the part rests overhanging the fence's tip", t_s),
+            Self::TooLong { t_s } => ("the push took too many steps", t_s),
+        };
+        write!(f, "{what} at t = {t_s:.4} s")
+    }
+}
+
 /// Where a run ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outcome {

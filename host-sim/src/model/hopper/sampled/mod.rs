@@ -295,9 +295,21 @@ fn control_error(e: ParamError) -> SampledError {
         "stale_limit_steps" => "hopper.control.stale_limit_steps",
         "sensor_latency_s" => "hopper.sensor.latency_s",
         "liftoff_height_m" => "hopper.liftoff_height_m",
-        _ => "hopper.control",
+        _ => "",
     };
-    param(key, format!("is invalid ({e})"))
+    let why = match e {
+        ParamError::NotFinite(_) => {
+            "must be a finite number (the controller holds it as an f32, below 3.4e38 in size)"
+        }
+        ParamError::NotPositive(_) => "must be > 0",
+        ParamError::Negative(_) => "must be >= 0",
+        _ => "is out of its allowed range (docs/hopper.md, \"The hopper on the MCU\")",
+    };
+    match key {
+        // a controller parameter no scene key maps to: the table, with the field
+        "" => param("hopper.control", format!("is invalid ({e})")),
+        key => param(key, why),
+    }
 }
 
 /// The longest time whose control steps of `dt_s` are at most [`MAX_STEPS`]: the default
