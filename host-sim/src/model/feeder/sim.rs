@@ -395,3 +395,29 @@ fn check(part: &Part, setup: &Setup, pose: &Pose, fence: &Fence, t: f64) -> Opti
     let over = d.iter().any(|(d, s)| d.abs() <= tol && *s > len + tol);
     (on && over).then_some(Failure::OffFenceTip { t_s: t })
 }
+
+#[cfg(test)]
+mod failure_words {
+    use super::Failure;
+
+    /// Finding 14 (issue 22): a failure reads as words with its time, not as a Debug dump.
+    #[test]
+    fn failures_read_as_words() {
+        for (f, words) in [
+            (
+                Failure::TooLong { t_s: 600.0 },
+                "too many steps at t = 600.0000 s",
+            ),
+            (
+                Failure::PastPivot { t_s: 1.25 },
+                "line through the pivot at t = 1.2500 s",
+            ),
+            (Failure::OffBelt { t_s: 0.5 }, "left the belt"),
+            (Failure::OffFenceTip { t_s: 0.5 }, "fence's tip"),
+        ] {
+            let text = f.to_string();
+            assert!(text.contains(words), "{text}");
+            assert!(!text.contains('{') && !text.contains("t_s"), "{text}");
+        }
+    }
+}

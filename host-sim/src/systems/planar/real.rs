@@ -392,3 +392,53 @@ impl RealTableScene {
         c
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera(latency_s: f64) -> CameraConfig {
+        CameraConfig {
+            latency_s,
+            ..CameraConfig::realistic(0)
+        }
+    }
+
+    /// Finding 12 (issue 22): the plan freeze is the core's 0.03 s where that fits (the
+    /// default table), longer where the latency and the planning cycle need it, and always
+    /// one the core accepts.
+    #[test]
+    fn the_plan_freeze_is_derived_so_the_core_accepts_it() {
+        let d = RealTableScene::default();
+        assert_eq!(d.commit_s(Some(&camera(0.004))).unwrap(), 0.03);
+        for (rate, iterations, latency) in [(50.0, 1, 0.0), (100.0, 2, 0.05), (61.0, 4, 0.0)] {
+            let t = RealTableScene {
+                control_rate_hz: rate,
+                contact_iterations: iterations,
+                ..RealTableScene::default()
+            };
+            let commit = t.commit_s(Some(&camera(latency))).unwrap();
+            // latency + (iterations + 8) periods, the docs' rule
+            let due = latency + f64::from(iterations + 8) / rate;
+            assert!(f64::from(commit) > due, "{rate} Hz: {commit} <= {due}");
+            assert!(commit <= MAX_COMMIT_S);
+            let mut p = TiltParams {
+                dt_s: (1.0 / rate) as f32,
+                contact_iterations: iterations,
+                commit_s: commit,
+                ..TiltParams::default()
+            };
+            p.estimator.latency_s = latency as f32;
+            assert_eq!(p.validate(), Ok(()), "{rate} Hz");
+        }
+        // exactly at the docs' bound, (4 + 8) / 0.2 s = 60 Hz, the rate must be above it
+        let t = RealTableScene {
+            control_rate_hz: 60.0,
+            contact_iterations: 4,
+            ..RealTableScene::default()
+        };
+        let e = t.commit_s(None).unwrap_err();
+        assert_eq!(e.key, "real_table.control_rate_hz");
+        assert!(e.reason.contains("above 60.00 Hz"), "{e}");
+    }
+}
