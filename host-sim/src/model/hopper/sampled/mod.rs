@@ -299,11 +299,11 @@ fn control_error(e: ParamError) -> SampledError {
     };
     let why = match e {
         ParamError::NotFinite(_) => {
-            "must be a finite number (the controller holds it as an f32, below 3.4e38 in size)"
+            "is invalid: not a finite number (the controller holds it as an f32, below 3.4e38 in size)"
         }
-        ParamError::NotPositive(_) => "must be > 0",
-        ParamError::Negative(_) => "must be >= 0",
-        _ => "is out of its allowed range (docs/hopper.md, \"The hopper on the MCU\")",
+        ParamError::NotPositive(_) => "is invalid: must be > 0",
+        ParamError::Negative(_) => "is invalid: must be >= 0",
+        _ => "is invalid: out of its allowed range (docs/hopper.md, \"The hopper on the MCU\")",
     };
     match key {
         // a controller parameter no scene key maps to: the table, with the field
