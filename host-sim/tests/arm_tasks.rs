@@ -202,7 +202,7 @@ fn an_impossible_task_says_which_constraint_failed() {
     let e = dexter_sim::model::arm::planner::plan(&system(text)).unwrap_err();
     assert!(matches!(e, ArmError::NoPlan(_)));
     assert!(
-        e.to_string().contains("Goal") || e.to_string().contains("Velocity"),
+        e.to_string().contains("the goal pose") || e.to_string().contains("the joint speed limit"),
         "{e}"
     );
 }

@@ -38,9 +38,28 @@ pub fn parse_set(arg: &str) -> Result<(String, toml::Value), SceneError> {
         Ok(mut t) => t
             .remove("v")
             .unwrap_or_else(|| toml::Value::String(raw.to_string())),
+        Err(_) if is_integer_literal(raw) => {
+            return Err(SceneError::new(
+                key,
+                format!(
+                    "{raw} is an integer outside TOML's range, {} ..= {}",
+                    i64::MIN,
+                    i64::MAX
+                ),
+            ))
+        }
         Err(_) => toml::Value::String(raw.to_string()),
     };
     Ok((key.to_string(), value))
+}
+
+/// True if `raw` reads as a decimal integer (sign, digits, `_` between digits): one TOML
+/// refuses only because it does not fit in an i64.
+fn is_integer_literal(raw: &str) -> bool {
+    let digits = raw.strip_prefix(['+', '-']).unwrap_or(raw);
+    digits.starts_with(|c: char| c.is_ascii_digit())
+        && digits.ends_with(|c: char| c.is_ascii_digit())
+        && digits.chars().all(|c| c.is_ascii_digit() || c == '_')
 }
 
 /// Parse every `--set` argument ([`parse_set`]); the first bad one is the error.
@@ -94,6 +113,28 @@ mod tests {
         );
         assert!(parse_set("novalue").is_err());
         assert!(parse_set("a..b=1").is_err());
+    }
+
+    /// Finding 14 (issue 22): an integer beyond i64 says so, not "invalid type: string".
+    #[test]
+    fn an_integer_beyond_i64_is_refused_as_out_of_range() {
+        for raw in [
+            "9223372036854775808",
+            "99999999999999999999",
+            "-9223372036854775809",
+        ] {
+            let e = parse_set(&format!("sensor.seed={raw}")).unwrap_err();
+            assert_eq!(e.key, "sensor.seed");
+            assert!(e.reason.contains("outside TOML's range"), "{e}");
+            assert!(e.reason.contains("9223372036854775807"), "{e}");
+        }
+        let top = parse_set("sensor.seed=9223372036854775807").unwrap().1;
+        assert_eq!(top, toml::Value::Integer(i64::MAX));
+        // a word is still a bare string
+        assert_eq!(
+            parse_set("a=12ab").unwrap().1,
+            toml::Value::String("12ab".into())
+        );
     }
 
     #[test]

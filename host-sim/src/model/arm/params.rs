@@ -210,7 +210,8 @@ fn default_hold() -> f64 {
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerTable {
-    /// `knots`: B-spline control points, 7 ..= 16 (the core's buffer) (9, as fig. 2).
+    /// `knots`: B-spline control points, 7 ..= 16 for tasks ending at rest, 5 ..= 16 for
+    /// throws (16: the core's buffer) (9, as fig. 2).
     pub knots: usize,
     /// `samples_per_phase`: constraint samples in each grasp phase (32).
     pub samples_per_phase: usize,

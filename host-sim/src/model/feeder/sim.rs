@@ -133,6 +133,19 @@ pub enum Failure {
     },
 }
 
+impl std::fmt::Display for Failure {
+    /// The failure in words, with its time in ms.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (what, t_s) = match *self {
+            Self::OffBelt { t_s } => ("the part left the belt over its right edge", t_s),
+            Self::PastPivot { t_s } => ("the part crossed the line through the pivot", t_s),
+            Self::OffFenceTip { t_s } => ("the part rests overhanging the fence's tip", t_s),
+            Self::TooLong { t_s } => ("the push took too many steps", t_s),
+        };
+        write!(f, "{what} at t = {t_s:.4} s")
+    }
+}
+
 /// Where a run ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outcome {
@@ -381,4 +394,30 @@ fn check(part: &Part, setup: &Setup, pose: &Pose, fence: &Fence, t: f64) -> Opti
         .any(|(d, s)| d.abs() <= tol && (0.0..=len).contains(s));
     let over = d.iter().any(|(d, s)| d.abs() <= tol && *s > len + tol);
     (on && over).then_some(Failure::OffFenceTip { t_s: t })
+}
+
+#[cfg(test)]
+mod failure_words {
+    use super::Failure;
+
+    /// Finding 14 (issue 22): a failure reads as words with its time, not as a Debug dump.
+    #[test]
+    fn failures_read_as_words() {
+        for (f, words) in [
+            (
+                Failure::TooLong { t_s: 600.0 },
+                "too many steps at t = 600.0000 s",
+            ),
+            (
+                Failure::PastPivot { t_s: 1.25 },
+                "line through the pivot at t = 1.2500 s",
+            ),
+            (Failure::OffBelt { t_s: 0.5 }, "left the belt"),
+            (Failure::OffFenceTip { t_s: 0.5 }, "fence's tip"),
+        ] {
+            let text = f.to_string();
+            assert!(text.contains(words), "{text}");
+            assert!(!text.contains('{') && !text.contains("t_s"), "{text}");
+        }
+    }
 }

@@ -80,10 +80,47 @@ fn param_error(e: ParamError) -> SceneError {
         other => return SceneError::whole(other),
     };
     let tables = ["arm.", "object.", "task.", "planner.", "tracking."];
-    match tables.iter().any(|t| key.starts_with(t)) {
-        true => SceneError::new(key, reason),
-        false => SceneError::whole(format!("the core's arm controller rejects {e}")),
+    if tables.iter().any(|t| key.starts_with(t)) {
+        return SceneError::new(key, reason);
     }
+    match core_key(key) {
+        // the core holds each value as an f32: a finite f64 may still be too large
+        Some((key, note)) => SceneError::new(
+            key,
+            match e {
+                ParamError::NotFinite(_) => format!(
+                    "{reason} below 3.4e38 in size (the controller holds it as an f32){note}"
+                ),
+                _ => format!("{reason}{note}"),
+            },
+        ),
+        None => SceneError::whole(format!("the core's arm controller rejects {e}")),
+    }
+}
+
+/// The scene key of a field of the core's `ArmParams`, and what else feeds it.
+fn core_key(field: &str) -> Option<(&'static str, &'static str)> {
+    Some(match field {
+        "dt_s" => ("tracking.dt_s", ""),
+        "kp_per_s2" => ("tracking.kp_per_s2", ""),
+        "kd_per_s" => ("tracking.kd_per_s", ""),
+        "max_tracking_error_rad" => ("tracking.max_tracking_error_rad", ""),
+        "limits.accel_max_radps2" => ("tracking.accel_max_radps2", ""),
+        "limits.min_angle_rad" => ("arm.min_angle_rad", ""),
+        "limits.max_angle_rad" => ("arm.max_angle_rad", ""),
+        "limits.velocity_max_radps" => ("arm.velocity_max_radps", ""),
+        "limits.torque_max_nm" => ("arm.torque_max_nm", ""),
+        "brake_accel_radps2" => ("arm.brake_accel_radps2", ""),
+        "inertia_kgm2" => (
+            "arm.inertia_kgm2",
+            " (with the payload's, from object.mass_kg and object.side_m)",
+        ),
+        "gravity_torque_nm" => (
+            "arm.gravity_torque_nm",
+            " (with the payload's, from object.mass_kg and arm.gravity_mps2)",
+        ),
+        _ => return None,
+    })
 }
 
 impl System for ArmSystem {

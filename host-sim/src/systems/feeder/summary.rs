@@ -178,7 +178,7 @@ impl FeederOutcome {
             s.final_contact_radius_m, s.radius_error_m, s.planned_radius_m, s.sim_steps
         );
         if let Some(f) = &s.failure {
-            let _ = writeln!(o, "  failure:    {f:?}");
+            let _ = writeln!(o, "  failure:    {f}");
         }
         if self.report.noise {
             let _ = writeln!(

@@ -12,7 +12,7 @@ use crate::model::hopper::analysis::{
     self as map_analysis, Eq15, Eq15InEnergy, Eq17Conjugate, Eq19Family, EQ19_SCHWARZIAN,
 };
 use crate::model::hopper::params::ModelKind;
-use crate::model::hopper::{Cycle, RunEnd, RunOptions, Start};
+use crate::model::hopper::{Cycle, HopperError, RunEnd, RunOptions, Start};
 use crate::stream::Tail;
 use crate::system::{Failure, Report};
 use serde_json::json;
@@ -82,7 +82,7 @@ impl CycleMap<'_> {
             .sc
             .hopper
             .simulate(start, n, &MAP_ONLY)
-            .map_err(|e| Failure::run(format!("cycle map at {u}: {e}")))?;
+            .map_err(|e| self.outside(u, &e))?;
         if run.end != RunEnd::Completed {
             return Err(Failure::run(format!(
                 "cycle map at {} = {u}: the run ended with {}",
@@ -97,6 +97,20 @@ impl CycleMap<'_> {
             Coord::TouchdownSpeed => -c.next_touchdown.velocity_mps,
         };
         Ok((run.cycles[0], next))
+    }
+    /// Why the map cannot be evaluated at `u`, a state the analysis probes (not the
+    /// scene's start): a start error there names the settings that drove the orbit out.
+    fn outside(&self, u: f64, e: &HopperError) -> Failure {
+        let at = format!("cycle map at {} = {u:.6e}", self.coord.name());
+        match e {
+            HopperError::Relation {
+                param: "hopper.initial_heights_m",
+                requirement,
+            } => Failure::run(format!(
+                "{at}: the orbit left the model's domain ({requirement}, a state the analysis reached, not hopper.initial_heights_m): with this thrust and friction (hopper.thrust_tau_mps2, hopper.thrust_delta_s, hopper.friction_gamma_per_s) there is no orbit to analyze"
+            )),
+            e => Failure::run(format!("{at}: {e}")),
+        }
     }
     fn p(&self, u: f64) -> Result<f64, Failure> {
         Ok(self.step(u)?.1)

@@ -67,6 +67,7 @@ pub struct HopperConfig {
 impl HopperConfig {
     /// Deserialize and validate; errors name the key (`hopper.spring_eta1 must be > 0`).
     pub fn from_table(name: &str, table: toml::Table) -> Result<Self, SceneError> {
+        sampled_tables_in_file(&table)?;
         let params = deserialize::<SceneFileTable>(table)?.hopper;
         let hopper = params.build().map_err(SceneError::whole)?;
         let starts = params.starts().map_err(SceneError::whole)?;
@@ -227,4 +228,20 @@ impl Analyzes for HopperSystem {
         let _ = file;
         Ok(Box::new(analyze::analyze(cfg)?))
     }
+}
+
+/// The sampled hopper's tables, `[hopper.control]` and `[hopper.sensor]`, given to the exact
+/// hopper: the system is chosen by the scene file's own tables, so they came from `--set`
+/// (or a sweep), which cannot switch a scene to the sampled hopper.
+fn sampled_tables_in_file(table: &toml::Table) -> Result<(), SceneError> {
+    let hopper = table.get("hopper").and_then(toml::Value::as_table);
+    for key in ["control", "sensor"] {
+        if hopper.is_some_and(|h| h.contains_key(key)) {
+            return Err(SceneError::new(
+                format!("hopper.{key}"),
+                "belongs to the sampled hopper, which runs only a scene file with its own [hopper.control] table (e.g. scenes/hopper-raibert-sil.toml; docs/hopper.md, \"The hopper on the MCU\"): --set cannot turn this exact-hopper scene into one",
+            ));
+        }
+    }
+    Ok(())
 }

@@ -17,6 +17,28 @@ use crate::system::{Failure, SweepBase, SweepReport, Sweeps};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// The line scene's integer keys: a sweep gives them integers, as the other systems do.
+const INTEGER_KEYS: [&str; 8] = [
+    "stop.impacts",
+    "control.stale_limit_steps",
+    "control.estimator.reinit_after",
+    "control.estimator.settle_samples",
+    "sensor.seed",
+    "jitter.seed",
+    "zeno.max_impacts_per_segment",
+    "analysis.max_period",
+];
+
+/// The TOML value of a swept number: an integer key keeps a whole value an integer (a
+/// fractional or huge one stays a float, and the scene then names the key's type).
+fn swept_value(key: &str, v: f64) -> toml::Value {
+    if INTEGER_KEYS.contains(&key) && v.fract() == 0.0 && v.abs() < 9.0e15 {
+        toml::Value::Integer(v as i64)
+    } else {
+        toml::Value::Float(v)
+    }
+}
+
 /// One run of a sweep: its late apexes (m), settled period and end.
 pub struct LatePoint {
     apexes: Vec<f64>,
@@ -33,7 +55,7 @@ fn late_point(
     keep: usize,
 ) -> Result<LatePoint, RunError> {
     let mut t = table.clone();
-    crate::scene::apply_set(&mut t, key, toml::Value::Float(value))?;
+    crate::scene::apply_set(&mut t, key, swept_value(key, value))?;
     let scene = Scene::from_table(t)?;
     let mut tail = Tail::new(keep);
     let out = run_streaming(&scene, &RunOptions::default(), None, &mut |r| {

@@ -103,6 +103,9 @@ fn within(key: &str, v: f64, lo: f64, hi: f64) -> Result<f64, SceneError> {
 impl Scene {
     /// Check every value's range and the rules between keys; the error names the key.
     pub fn validate(&self) -> Result<(), SceneError> {
+        if let Some(name) = &self.scene.name {
+            check_name(name)?;
+        }
         let p = &self.physics;
         positive("physics.gravity_mps2", p.gravity_mps2)?;
         within("physics.restitution", p.restitution, 0.0, 1.0)?;
@@ -341,6 +344,29 @@ pub fn param_error(e: &ParamError) -> SceneError {
         n => format!("control.{n}"),
     };
     SceneError::new(key, e.to_string())
+}
+
+/// Longest `scene.name`, bytes (it is a plot file's stem: a suffix such as `-phase.svg`
+/// is added, and a file name holds 255 bytes).
+pub const MAX_NAME_BYTES: usize = 200;
+
+/// `scene.name` must make a file stem: 1 ..= [`MAX_NAME_BYTES`] bytes, no path
+/// separator or control character, not `.` or `..` (checked before the run, not at the plots).
+fn check_name(name: &str) -> Result<(), SceneError> {
+    let n = name.len();
+    let why = if n == 0 {
+        "must not be empty (it names the plot files)".to_string()
+    } else if n > MAX_NAME_BYTES {
+        format!("must be at most {MAX_NAME_BYTES} bytes (it names the plot files), got {n}")
+    } else if name.contains(['/', '\\']) || name.chars().any(char::is_control) {
+        "must not hold a path separator (/ or \\) or a control character (it names the plot files)"
+            .to_string()
+    } else if name == "." || name == ".." {
+        format!("must not be {name:?} (it names the plot files)")
+    } else {
+        return Ok(());
+    };
+    Err(SceneError::new("scene.name", why))
 }
 
 #[cfg(test)]

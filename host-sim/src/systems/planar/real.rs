@@ -19,8 +19,11 @@ pub const MAX_CONTROL_RATE_HZ: f64 = 10_000.0;
 pub const MAX_CAMERA_RATE_HZ: f64 = 100_000.0;
 /// Longest `real_table.max_duration_s`, s (a bound on a run's control steps).
 pub const MAX_DURATION_S: f64 = 86_400.0;
-/// Longest camera latency, s.
-pub const MAX_LATENCY_S: f64 = 1.0;
+/// Longest camera latency, s (excluded): the core's estimator compensates less than 0.1 s
+/// (`dexter_core::tilt_control::FlightTuning`).
+pub const MAX_LATENCY_S: f64 = 0.1;
+/// The core's longest plan freeze before an impact, s (`TiltParams::commit_s`, <= 0.2).
+pub const MAX_COMMIT_S: f32 = 0.2;
 
 /// Whether the drives obey their limits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -237,7 +240,15 @@ impl CameraTable {
         check(&k("rate_hz"), self.rate_hz, 0.0, MAX_CAMERA_RATE_HZ, true)?;
         check(&k("noise_m"), self.noise_m, 0.0, 1.0, false)?;
         check(&k("noise_rad"), self.noise_rad, 0.0, 1.0, false)?;
-        check(&k("latency_s"), self.latency_s, 0.0, MAX_LATENCY_S, false)?;
+        let latency = self.latency_s;
+        if !(latency.is_finite() && latency >= 0.0 && (latency as f32) < MAX_LATENCY_S as f32) {
+            return Err(SceneError::new(
+                k("latency_s"),
+                format!(
+                    "must be in [0, {MAX_LATENCY_S}) s (the controller predicts across less than {MAX_LATENCY_S} s of delay), got {latency}"
+                ),
+            ));
+        }
         check(&k("quantization_m"), self.quantization_m, 0.0, 1.0, false)?;
         check(
             &k("quantization_rad"),
@@ -309,7 +320,8 @@ impl RealTableScene {
         )?;
         let (tilt, stroke) = (self.tilt.limits()?, self.stroke.limits()?);
         let camera = self.camera.config(p.seed)?;
-        let base = self.controller_base(&tilt, &stroke);
+        let mut base = self.controller_base(&tilt, &stroke);
+        base.commit_s = self.commit_s(camera.as_ref())?;
         let controller = controller_params_for(model, &base, camera.as_ref())
             .map_err(|e| SceneError::new("real_table", e.to_string()))?;
         let limited = self.drives == Drives::Limited;
@@ -326,6 +338,38 @@ impl RealTableScene {
             .validate(model)
             .map_err(|e| SceneError::new("real_table", e.to_string()))?;
         Ok(table)
+    }
+
+    /// The controller's plan freeze, `commit_s`, derived from the keys the user sets: the
+    /// core's 0.03 s default, or more when the camera's latency plus a planning cycle
+    /// (`contact_iterations` + 7 periods) plus one period needs more (then one period more
+    /// than that), at most [`MAX_COMMIT_S`]. Where even that is too short the error names
+    /// `real_table.control_rate_hz` with the lowest rate that fits.
+    fn commit_s(&self, camera: Option<&CameraConfig>) -> Result<f32, SceneError> {
+        let latency = camera.map_or(0.0, |c| c.latency_s as f32);
+        let dt = (1.0 / self.control_rate_hz) as f32;
+        let probe = TiltParams {
+            contact_iterations: self.contact_iterations,
+            ..TiltParams::default()
+        };
+        let periods = probe.cycle_periods() + 1;
+        // the core's own sum (`TiltParams::validate`), f32
+        let due = latency + f32::from(periods - 1) * dt + dt;
+        let commit = TiltParams::default()
+            .commit_s
+            .max(due + dt)
+            .min(MAX_COMMIT_S);
+        if commit > due {
+            return Ok(commit);
+        }
+        let lowest_hz = f64::from(periods) / (f64::from(MAX_COMMIT_S) - f64::from(latency));
+        Err(SceneError::new(
+            "real_table.control_rate_hz",
+            format!(
+                "must be above {lowest_hz:.2} Hz with real_table.camera.latency_s = {latency} s and real_table.contact_iterations = {}: the controller freezes its plan at most {MAX_COMMIT_S} s before an impact, and later than the latency plus contact_iterations + 8 control periods; got {}",
+                self.contact_iterations, self.control_rate_hz
+            ),
+        ))
     }
 
     /// The controller's parameters apart from the model's laws: rate, damping, Newton
@@ -346,5 +390,55 @@ impl RealTableScene {
         c.stroke.velocity_max_mps = stroke.velocity_max as f32;
         c.stroke.accel_max_mps2 = stroke.accel_max as f32;
         c
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera(latency_s: f64) -> CameraConfig {
+        CameraConfig {
+            latency_s,
+            ..CameraConfig::realistic(0)
+        }
+    }
+
+    /// Finding 12 (issue 22): the plan freeze is the core's 0.03 s where that fits (the
+    /// default table), longer where the latency and the planning cycle need it, and always
+    /// one the core accepts.
+    #[test]
+    fn the_plan_freeze_is_derived_so_the_core_accepts_it() {
+        let d = RealTableScene::default();
+        assert_eq!(d.commit_s(Some(&camera(0.004))).unwrap(), 0.03);
+        for (rate, iterations, latency) in [(50.0, 1, 0.0), (100.0, 2, 0.05), (61.0, 4, 0.0)] {
+            let t = RealTableScene {
+                control_rate_hz: rate,
+                contact_iterations: iterations,
+                ..RealTableScene::default()
+            };
+            let commit = t.commit_s(Some(&camera(latency))).unwrap();
+            // latency + (iterations + 8) periods, the docs' rule
+            let due = latency + f64::from(iterations + 8) / rate;
+            assert!(f64::from(commit) > due, "{rate} Hz: {commit} <= {due}");
+            assert!(commit <= MAX_COMMIT_S);
+            let mut p = TiltParams {
+                dt_s: (1.0 / rate) as f32,
+                contact_iterations: iterations,
+                commit_s: commit,
+                ..TiltParams::default()
+            };
+            p.estimator.latency_s = latency as f32;
+            assert_eq!(p.validate(), Ok(()), "{rate} Hz");
+        }
+        // exactly at the docs' bound, (4 + 8) / 0.2 s = 60 Hz, the rate must be above it
+        let t = RealTableScene {
+            control_rate_hz: 60.0,
+            contact_iterations: 4,
+            ..RealTableScene::default()
+        };
+        let e = t.commit_s(None).unwrap_err();
+        assert_eq!(e.key, "real_table.control_rate_hz");
+        assert!(e.reason.contains("above 60.00 Hz"), "{e}");
     }
 }

@@ -161,7 +161,13 @@ fn param_error(e: ParamError) -> SceneError {
         "kappa1" => "kappa1_s2pm2",
         n => n,
     };
-    SceneError::new(format!("planar_juggler.{key}"), e.to_string())
+    let reason = match e {
+        ParamError::NotFinite(_) => "must be a finite number",
+        ParamError::NotPositive(_) => "must be > 0",
+        ParamError::Negative(_) => "must be >= 0",
+        _ => "is out of its allowed range (docs/planar.md)",
+    };
+    SceneError::new(format!("planar_juggler.{key}"), reason)
 }
 
 impl JugglerTable {
@@ -181,6 +187,23 @@ impl JugglerTable {
         }
     }
 
+    /// Without `kappa1_s2pm2`, its default 0.5 / ((1 + alpha) v*^2), v*^2 = 2 g apex, must be
+    /// finite: a tiny gravity or apex is reported under the keys the user set.
+    fn default_kappa1_fits(&self) -> Result<(), SceneError> {
+        let (g, apex) = (self.gravity_mps2, self.target_apex_m);
+        let given = g.is_finite() && g > 0.0 && apex.is_finite() && apex > 0.0;
+        if self.kappa1_s2pm2.is_some() || !given || self.params().kappa1_s2pm2.is_finite() {
+            return Ok(());
+        }
+        Err(SceneError::new(
+            "planar_juggler.gravity_mps2",
+            format!(
+                "is too small: with planar_juggler.target_apex_m = {apex} m, v*^2 = 2 g apex = {:e} m^2/s^2 makes the default gain 0.5 / ((1 + restitution) v*^2) infinite; raise gravity_mps2 or target_apex_m, or set planar_juggler.kappa1_s2pm2",
+                2.0 * g * apex
+            ),
+        ))
+    }
+
     /// Validate into a config named `name`.
     pub fn config(self, name: &str) -> Result<JugglerConfig, SceneError> {
         // the gains' defaults depend on alpha: check it first
@@ -190,6 +213,7 @@ impl JugglerTable {
                 format!("must be in (0, 1], got {}", self.restitution),
             ));
         }
+        self.default_kappa1_fits()?;
         let params = self.params();
         let juggler = match self.law {
             Law::Mirror => params.mirror(),

@@ -61,6 +61,28 @@ pub enum Kind {
     BrakeStop,
 }
 
+impl std::fmt::Display for Kind {
+    /// The constraint in words, for error messages.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Velocity => "the joint speed limit",
+            Self::Accel => "the joint acceleration limit",
+            Self::Torque => "the joint torque limit",
+            Self::TorqueRate => "the joint torque-rate limit",
+            Self::GraspFriction => "the grasp's friction cone",
+            Self::GraspNormal => "the grasp's unilateral contact",
+            Self::CentreOfPressure => "the grasp's centre of pressure",
+            Self::RollFriction => "the roll's friction cone",
+            Self::RollNormal => "the roll's unilateral contact",
+            Self::RollAngle => "the roll angle's bounds",
+            Self::RollCompleted => "the roll's completion on time",
+            Self::Release => "separation at the release",
+            Self::Goal => "the goal pose",
+            Self::BrakeStop => "the brake stop within the joint limits",
+        })
+    }
+}
+
 /// One sample of the plan's own prediction (for plots of fig. 2-3).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct PlanSample {

@@ -171,10 +171,7 @@ pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
         }
     }
     let Some((start, problem, s, _)) = best else {
-        return Err(ArmError::NoPlan(format!(
-            "no start met every constraint; the closest violated {:?} by {:.3e} (scaled; solver status {})",
-            least_bad.1, least_bad.0, least_bad.2
-        )));
+        return Err(ArmError::NoPlan(no_plan_message(least_bad)));
     };
     let e = problem.evaluate(&s.x, true);
     let d = problem.layout.decode(&s.x);
@@ -220,4 +217,22 @@ pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
         status: s.status,
         samples: e.trace,
     })
+}
+
+/// Why no start gave a plan, in words: the constraint the closest start violated most, by
+/// how much (scaled), and the solver's status, each only when known.
+fn no_plan_message((by, kind, status): (f64, Option<Kind>, String)) -> String {
+    let mut m = String::from("no start met every constraint");
+    match kind {
+        Some(kind) if by.is_finite() => {
+            m += &format!("; the closest start violated {kind} by {by:.3e} (scaled)");
+        }
+        Some(kind) => m += &format!("; the closest start violated {kind}"),
+        None if by.is_finite() => m += &format!("; the closest start was off by {by:.3e} (scaled)"),
+        None => m += "; no start's constraints could be evaluated (not finite)",
+    }
+    if !status.is_empty() {
+        m += &format!(" (solver status: {status})");
+    }
+    m
 }

@@ -46,7 +46,7 @@ pub fn settle_on(f: &Feeder, st: &State, sched: &Schedule) -> Result<State, Stri
         |_, _, _| {},
     );
     if let Some(fail) = out.failure {
-        return Err(format!("{fail:?}"));
+        return Err(fail.to_string());
     }
     let fence = sched.at(out.t_s);
     let edge = flush_edge(&f.part, &out.pose, &fence, f.setup.fence_length_m)
@@ -79,7 +79,7 @@ pub fn arrive(f: &Feeder, arrival: Pose, max_s: f64) -> Result<Piece, String> {
         resting,
     );
     if let Some(fail) = out.failure {
-        return Err(format!("arrival: {fail:?}"));
+        return Err(format!("arrival: {fail}"));
     }
     if !resting(&out.pose, &out.motion) {
         return Err(format!(
@@ -375,7 +375,7 @@ fn rest_after(
         |_, m| now.get() >= moves_end && resting(m),
     );
     if let Some(fail) = out.failure {
-        return Err(format!("push-and-drift step: {fail:?}"));
+        return Err(format!("push-and-drift step: {fail}"));
     }
     if !resting(&out.motion) || out.t_s < moves_end {
         return Err(format!(

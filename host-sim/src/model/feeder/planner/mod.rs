@@ -460,7 +460,10 @@ fn diagnose(
     let g = &p.edges[goal];
     let (lo, hi) = (g.a_m, f.setup.fence_length_m - g.b_m());
     if !(lo..=hi).contains(&r_goal) {
-        return format!("feeder.goal.contact_radius_m = {r_goal:.4} m is outside the fence's range [{lo:.4}, {hi:.4}] m for goal edge {goal}");
+        return format!(
+            "feeder.goal.contact_radius_m = {} m is outside the fence's range [{lo:.4}, {hi:.4}] m for goal edge {goal}",
+            metres(r_goal)
+        );
     }
     let (mut need_fence, mut need_belt) = (f64::INFINITY, f64::INFINITY);
     for seq in seqs {
@@ -482,4 +485,14 @@ fn diagnose(
         st.edge,
         why.join("; ")
     )
+}
+
+/// A length for a message: four decimals, or four significant digits in exponent form when
+/// that would be long or show nothing (1e300 m, 1e-9 m).
+fn metres(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e4).contains(&v.abs()) {
+        format!("{v:.4e}")
+    } else {
+        format!("{v:.4}")
+    }
 }

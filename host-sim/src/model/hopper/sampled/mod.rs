@@ -65,6 +65,9 @@ pub const MAX_CYCLE_RECORDS: usize = 1_000_000;
 /// Apex heights reported as `late_apex_heights_m`.
 pub const LATE_APEXES: usize = 8;
 
+/// Relative rounding of the control period to f32 (half an ulp, with room).
+const PERIOD_ROUNDING: f64 = f32::EPSILON as f64;
+
 /// Slack for comparing sample and control times, s.
 const TIME_SLACK_S: f64 = 1e-12;
 
@@ -292,9 +295,33 @@ fn control_error(e: ParamError) -> SampledError {
         "stale_limit_steps" => "hopper.control.stale_limit_steps",
         "sensor_latency_s" => "hopper.sensor.latency_s",
         "liftoff_height_m" => "hopper.liftoff_height_m",
-        _ => "hopper.control",
+        _ => "",
     };
-    param(key, format!("is invalid ({e})"))
+    let why = match e {
+        ParamError::NotFinite(_) => {
+            "is invalid: not a finite number (the controller holds it as an f32, below 3.4e38 in size)"
+        }
+        ParamError::NotPositive(_) => "is invalid: must be > 0",
+        ParamError::Negative(_) => "is invalid: must be >= 0",
+        _ => "is invalid: out of its allowed range (docs/hopper.md, \"The hopper on the MCU\")",
+    };
+    match key {
+        // a controller parameter no scene key maps to: the table, with the field
+        "" => param("hopper.control", format!("is invalid ({e})")),
+        key => param(key, why),
+    }
+}
+
+/// The longest time whose control steps of `dt_s` are at most [`MAX_STEPS`]: the default
+/// `max_time_s` at a fast rate. It is computed from the controller's own (f32) period, so
+/// that `time / dt_s` never rounds past the cap ([`SampledConfig::validate`]).
+pub fn longest_time_s(dt_s: f64) -> f64 {
+    let cap = MAX_STEPS as f64;
+    let mut t = cap * dt_s;
+    while t / dt_s > cap {
+        t = t.next_down();
+    }
+    t
 }
 
 impl SampledConfig {
@@ -312,13 +339,14 @@ impl SampledConfig {
         cycles: usize,
     ) -> Result<Self, SampledError> {
         let control = controller_params(&model, law, rate_hz, &sensor, detector)?;
+        let dt_s = f64::from(control.dt_s);
         Ok(Self {
             model,
             start_height_m,
             control,
             sensor,
             cycles,
-            max_time_s: (10.0 + 60.0 * cycles as f64).min(MAX_STEPS as f64 / rate_hz),
+            max_time_s: (10.0 + 60.0 * cycles as f64).min(longest_time_s(dt_s)),
             settle_tolerance: 1e-3,
             compare_exact: true,
             record_cycles: false,
@@ -332,6 +360,7 @@ impl SampledConfig {
     }
 
     /// Control steps the run may take at most.
+    #[inline]
     pub fn max_steps(&self) -> u64 {
         (self.max_time_s / self.dt_s()).ceil() as u64
     }
@@ -401,7 +430,9 @@ impl SampledConfig {
         if !(rate.is_finite() && rate > 0.0) {
             return Err(param("hopper.sensor.rate_hz", "must be a number > 0"));
         }
-        if rate > MAX_SENSOR_RATE_RATIO * rate_c * (1.0 + 1e-9) {
+        // rate_c is 1 / the f32 period, within f32's rounding of the scene's rate (whose
+        // exact limit the scene checks, `check_control`): allow that rounding here
+        if rate > MAX_SENSOR_RATE_RATIO * rate_c * (1.0 + PERIOD_ROUNDING) {
             return Err(param(
                 "hopper.sensor.rate_hz",
                 format!("must be <= {MAX_SENSOR_RATE_RATIO} x hopper.control.rate_hz"),

@@ -7,6 +7,7 @@
 use super::super::HopperConfig;
 use crate::model::hopper::sampled::{
     DetectorOptions, SampledConfig, SampledError, SensorConfig, TimelineWindow,
+    MAX_SENSOR_RATE_RATIO,
 };
 use crate::model::hopper::valve::ValveModel;
 use crate::model::hopper::{HopperModel, Start};
@@ -177,6 +178,7 @@ impl SampledHopperConfig {
         let model = valve_model(&hopper)?;
         let start_m = single_start(&hopper)?;
         check_control(&control, &hopper)?;
+        check_sensor_rate(&sensor, &control)?;
         let cycles = hopper.params.cycles;
         let mut sampled = SampledConfig::new(
             model,
@@ -272,6 +274,24 @@ fn single_start(h: &HopperConfig) -> Result<f64, SceneError> {
     }
 }
 
+/// `hopper.sensor.rate_hz` against the documented limit, 16 x `hopper.control.rate_hz`,
+/// exactly (the model checks it against the f32 period, which rounds the rate).
+fn check_sensor_rate(s: &SensorTable, c: &ControlTable) -> Result<(), SceneError> {
+    let Some(rate) = s.rate_hz else {
+        return Ok(());
+    };
+    let most = MAX_SENSOR_RATE_RATIO * c.rate_hz;
+    if rate.is_finite() && rate > most {
+        return Err(SceneError::new(
+            "hopper.sensor.rate_hz",
+            format!(
+                "must be <= {MAX_SENSOR_RATE_RATIO} x hopper.control.rate_hz = {most} Hz, got {rate}"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn check_control(c: &ControlTable, h: &HopperConfig) -> Result<(), SceneError> {
     if !(c.rate_hz.is_finite() && c.rate_hz > 0.0 && c.rate_hz <= MAX_RATE_HZ) {
         return Err(SceneError::new(
@@ -304,4 +324,58 @@ fn check_control(c: &ControlTable, h: &HopperConfig) -> Result<(), SceneError> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::hopper::sampled::MAX_STEPS;
+
+    /// `scenes/hopper-raibert-sil.toml` with `sets` applied, loaded.
+    fn raibert(sets: &[(&str, toml::Value)]) -> Result<SampledHopperConfig, SceneError> {
+        let text = include_str!("../../../../../scenes/hopper-raibert-sil.toml");
+        let mut table: toml::Table = text.parse().unwrap();
+        for (key, value) in sets {
+            crate::scene::apply_set(&mut table, key, value.clone()).unwrap();
+        }
+        SampledHopperConfig::from_table("raibert", table)
+    }
+
+    /// Finding 13: the default time bound at the step cap, at every rate up to the
+    /// documented 100 kHz, is valid (the user set only the rate and the cycles).
+    #[test]
+    fn the_default_time_bound_never_refuses_a_valid_rate() {
+        for rate in [
+            1000.0, 3000.0, 7000.0, 10_000.0, 30_000.0, 99_999.0, 100_000.0,
+        ] {
+            let c = raibert(&[
+                ("hopper.control.rate_hz", toml::Value::Float(rate)),
+                ("hopper.cycles", toml::Value::Integer(10_000_000)),
+            ])
+            .unwrap_or_else(|e| panic!("{rate} Hz: {e}"));
+            let steps = c.sampled.max_steps();
+            assert!(steps <= MAX_STEPS, "{rate} Hz: {steps} steps");
+            // the bound is the cap, not far below it (10^9 steps of the f32 period)
+            assert!(steps + 2 >= MAX_STEPS, "{rate} Hz: only {steps} steps");
+        }
+    }
+
+    /// Finding 13: the sensor at exactly 16 x the control rate is accepted, one ulp above
+    /// is refused, naming the sensor's key and the bound.
+    #[test]
+    fn the_sensor_rate_limit_is_exact() {
+        for control in [1000.0, 3000.0, 7000.0] {
+            let most: f64 = 16.0 * control;
+            let set = |r: f64| {
+                raibert(&[
+                    ("hopper.control.rate_hz", toml::Value::Float(control)),
+                    ("hopper.sensor.rate_hz", toml::Value::Float(r)),
+                ])
+            };
+            set(most).unwrap_or_else(|e| panic!("{most} Hz at {control} Hz: {e}"));
+            let e = set(most.next_up()).unwrap_err().to_string();
+            assert!(e.contains("hopper.sensor.rate_hz"), "{e}");
+            assert!(e.contains(&format!("{most}")), "{e}");
+        }
+    }
 }
