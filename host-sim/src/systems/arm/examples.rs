@@ -18,3 +18,11 @@ pub const THROW: &str = include_str!("../../../../scenes/arm-throw.toml");
 pub const ROLL: &str = include_str!("../../../../scenes/arm-roll.toml");
 /// `scenes/arm-rolling-throw.toml`.
 pub const ROLLING_THROW: &str = include_str!("../../../../scenes/arm-rolling-throw.toml");
+
+/// All four, with their names.
+pub const ALL: [(&str, &str); 4] = [
+    ("snatch", SNATCH),
+    ("throw", THROW),
+    ("roll", ROLL),
+    ("rolling_throw", ROLLING_THROW),
+];
