@@ -21,8 +21,9 @@ use dexter_sim::hil::{self, HilOptions, LinkKind, LockStep, StepBudget};
 use dexter_sim::model::planar::real_table::{
     controller_params_for, run_real_table, RealTable, TableRunConfig,
 };
-use dexter_sim::model::planar::table_run::{TableRun, TableRunEnd};
+use dexter_sim::model::planar::table_run::TableRun;
 use dexter_sim::model::planar::PlanarParams;
+use dexter_sim::model::planar::RunEnd;
 use dexter_tests::{firmware, static_worst_case};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -131,7 +132,7 @@ fn realistic_triangle_in_hil_stays_upright_and_equals_sil_bit_for_bit() {
     assert_eq!(report.over_budget_steps, 0);
     assert!(report.step_instructions_max <= TILT_BUDGET, "{report:?}");
     let s = &hil.summary;
-    assert_eq!(s.end, TableRunEnd::Completed, "{s:?}");
+    assert_eq!(s.end, RunEnd::Completed, "{s:?}");
     assert!(!s.tipped_over && s.impacts == 300);
     assert!(s.late_energy_error.abs() < 0.02, "{}", s.late_energy_error);
     assert_eq!(s.safe.safe_steps, 0);
