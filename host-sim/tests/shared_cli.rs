@@ -217,7 +217,7 @@ fn huge_sweeps_are_refused_naming_the_limit() {
 
 #[test]
 fn options_a_system_does_not_take_are_refused() {
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 6] = [
         (
             &[
                 "sweep",
@@ -245,7 +245,18 @@ fn options_a_system_does_not_take_are_refused() {
             "--duration",
         ),
         (&["run", &scene("planar-triangle"), "--hil"], "--hil"),
-        (&["analyze", &scene("line-juggler")], "analyze"),
+        (&["analyze", &scene("arm-throw")], "analyze"),
+        (
+            &[
+                "basin",
+                &scene("hopper-fig11"),
+                "--range",
+                "hopper.thrust_tau_mps2=40:41:2",
+                "--range2",
+                "hopper.spring_eta1=5:6:2",
+            ],
+            "basin",
+        ),
     ];
     for (args, word) in cases {
         let out = dexter(args);
