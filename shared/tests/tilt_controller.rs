@@ -164,7 +164,7 @@ fn the_safe_state_brakes_both_axes_to_rest() {
 #[test]
 fn invalid_parameters_are_named() {
     let d = TiltParams::default();
-    let cases: [(TiltParams, ParamError); 7] = [
+    let cases: [(TiltParams, ParamError); 9] = [
         (
             TiltParams { kappa: -1.0, ..d },
             ParamError::Negative("kappa"),
@@ -196,6 +196,20 @@ fn invalid_parameters_are_named() {
                 ..d
             },
             ParamError::OutOfRange("kappa_rate_s"),
+        ),
+        (
+            TiltParams {
+                kappa_x_pm: -0.001,
+                ..d
+            },
+            ParamError::OutOfRange("kappa_x_pm"),
+        ),
+        (
+            TiltParams {
+                kappa_xdot_spm: 1.001,
+                ..d
+            },
+            ParamError::OutOfRange("kappa_xdot_spm"),
         ),
         (
             TiltParams {

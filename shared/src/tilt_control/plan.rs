@@ -23,7 +23,8 @@
 //! ```
 //!
 //! with alpha = kappa theta (sec. 2.1; plus kappa_w theta' if that option is on, see
-//! [`super::TiltParams::kappa_rate_s`]), eta = G l cos theta + y'^2/2 and v_c the contact
+//! [`super::TiltParams::kappa_rate_s`], and the horizontal regulation - kappa_x x - kappa_x' x',
+//! see [`super::TiltParams::kappa_x_pm`]), eta = G l cos theta + y'^2/2 and v_c the contact
 //! point's velocity (eq. 23), all at the predicted impact. Targets outside an axis's travel
 //! or speed are clamped and reported (`clamped`).
 //!
@@ -64,6 +65,12 @@ pub struct LawConstants {
     /// kappa_w of the tilt-rate term alpha = kappa theta + kappa_w theta', s (0: the
     /// paper's law; see [`super::TiltParams::kappa_rate_s`]).
     pub kappa_rate_s: f32,
+    /// kappa_x of the horizontal regulation term alpha -= kappa_x x, rad/m (0: the
+    /// paper's law; see [`super::TiltParams::kappa_x_pm`]).
+    pub kappa_x_pm: f32,
+    /// kappa_x' of the same term on x', alpha -= kappa_x' x', s/m (0: the paper's law;
+    /// see [`super::TiltParams::kappa_xdot_spm`]).
+    pub kappa_xdot_spm: f32,
     /// kappa_E of eq. 25, s^2/m^2.
     pub kappa_e_s2pm2: f32,
     /// eta*, J/kg.
@@ -83,6 +90,8 @@ pub struct LawConstants {
 pub struct BodyAtImpact {
     /// theta, rad.
     pub theta_rad: f32,
+    /// x of the centre of mass, m (in the table's frame: 0 is the middle of its x stage).
+    pub x_m: f32,
     /// sin theta.
     pub sin_theta: f32,
     /// cos theta.
@@ -148,7 +157,9 @@ pub fn table_angle<T: SinCos>(
     let energy = law.gravity_mps2 * l * b.cos_theta + 0.5 * b.y_dot_mps * b.y_dot_mps;
     let gain = law.compensation + law.kappa_e_s2pm2 * (law.target_energy_jpkg - energy);
     let w = l * b.theta_dot_radps;
-    let alpha_law = law.kappa * b.theta_rad + law.kappa_rate_s * b.theta_dot_radps;
+    let alpha_law = law.kappa * b.theta_rad + law.kappa_rate_s * b.theta_dot_radps
+        - law.kappa_x_pm * b.x_m
+        - law.kappa_xdot_spm * b.x_dot_mps;
     let alpha = alpha_law.clamp_r(tilt.min, tilt.max);
     let (sa, ca) = T::sin_cos(alpha);
     TableAngle {
@@ -304,6 +315,8 @@ mod tests {
         LawConstants {
             kappa: 1.1,
             kappa_rate_s: 0.0,
+            kappa_x_pm: 0.0,
+            kappa_xdot_spm: 0.0,
             kappa_e_s2pm2: 0.165,
             target_energy_jpkg: 9.81 * 0.25,
             compensation: 1.0 / 3.0,
@@ -397,6 +410,7 @@ mod tests {
         let th = 0.25f64;
         let b = BodyAtImpact {
             theta_rad: th as f32,
+            x_m: 0.0,
             sin_theta: (th as f32).sin(),
             cos_theta: (th as f32).cos(),
             x_dot_mps: 0.6,
@@ -441,6 +455,7 @@ mod tests {
         let th = 0.25f32;
         let b = BodyAtImpact {
             theta_rad: th,
+            x_m: 0.0,
             sin_theta: th.sin(),
             cos_theta: th.cos(),
             x_dot_mps: 0.6,

@@ -302,6 +302,9 @@ pub enum RunEnd {
     /// The run's time limit passed before the requested impacts (only the real table has
     /// one: `real_table.max_duration_s`).
     TimeLimit,
+    /// The body's centre of mass left the x range the real table can be under
+    /// (`real_table.stage`): the body fell off the table.
+    OutOfTravel,
 }
 
 /// How a streamed run ([`PlanarModel::run_streaming`]) ended.

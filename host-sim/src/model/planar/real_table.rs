@@ -5,10 +5,12 @@
 //! # The table
 //!
 //! A line at angle alpha through a pivot at height h. The pivot is carried horizontally
-//! under the body's centre of mass (an ideal x stage; the paper's table is an infinite
-//! line, and the law lets the body wander horizontally, ±0.8 m on the noise-free sec. 2.3
-//! triangle, several metres with noise, which a fixed pivot would have to meet with
-//! tan(alpha) x of stroke). The actuated axes are the tilt (alpha) and the vertical stroke
+//! under the body's centre of mass (an ideal x stage within its range; the paper's table is
+//! an infinite line, and its law lets the body wander horizontally, ±0.8 m on the
+//! noise-free sec. 2.3 triangle, tens of metres with noise, which a fixed pivot would have
+//! to meet with tan(alpha) x of stroke). The stage's range is finite
+//! ([`RealTable::x_range_m`]): the run ends when the centre of mass leaves it, and the
+//! controller's horizontal regulation (`TiltParams::kappa_x_pm`) keeps the body inside. The actuated axes are the tilt (alpha) and the vertical stroke
 //! (h): each follows its commanded acceleration, held over the control period, within its
 //! drive's limits ([`crate::effects::actuator::SecondOrderActuator`]: acceleration clamp,
 //! speed limit, hard travel stops; the tilt's in rad), or exactly
@@ -77,6 +79,13 @@ pub const MAX_SAMPLES: usize = 200_000;
 /// `tests/planar_real_table.rs`: 0.005 to 0.02 s all keep the triangle up with the
 /// realistic camera).
 pub const REALISTIC_KAPPA_RATE_S: f32 = 0.01;
+/// The horizontal regulation [`RealTable::realistic`] uses: kappa_x, rad/m, and kappa_x',
+/// s/m (`TiltParams::kappa_x_pm`; measured in `tests/planar_real_table.rs`).
+pub const REALISTIC_KAPPA_X: (f32, f32) = (0.002, 0.005);
+/// The x range of [`RealTable::realistic`], m: 2 m of stage travel and table (the
+/// sec. 2.3 start, theta0 = 0.3 rad, throws the body up to 0.5 m sideways in its first
+/// impacts, with or without the regulation; 0.78 m for camera seed 15).
+pub const REALISTIC_X_RANGE_M: [f64; 2] = [-1.0, 1.0];
 
 /// One drive's limits, in its own unit u (rad for the tilt, m for the stroke).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -140,6 +149,13 @@ pub struct RealTable {
     pub initial_height_m: f64,
     /// The run ends ([`RunEnd::TimeLimit`]) after this simulated time, s.
     pub max_duration_s: f64,
+    /// The x range (lowest, highest) over which the table can be under the body's centre
+    /// of mass, m: its x stage's travel plus the table's half length. The run ends
+    /// ([`RunEnd::OutOfTravel`]) at the first control step that finds the centre of mass
+    /// outside it. Within it the stage is ideal (module docs: the pivot's place along a
+    /// frictionless line does not change the impacts, so the stage's speed and
+    /// acceleration limits do not enter while the table is under the body).
+    pub x_range_m: [f64; 2],
 }
 
 impl RealTable {
@@ -151,6 +167,8 @@ impl RealTable {
     pub fn realistic(seed: u64) -> Self {
         let c = TiltParams {
             kappa_rate_s: REALISTIC_KAPPA_RATE_S,
+            kappa_x_pm: REALISTIC_KAPPA_X.0,
+            kappa_xdot_spm: REALISTIC_KAPPA_X.1,
             ..TiltParams::default()
         };
         Self {
@@ -171,6 +189,7 @@ impl RealTable {
             initial_tilt_rad: 0.0,
             initial_height_m: 0.0,
             max_duration_s: 600.0,
+            x_range_m: REALISTIC_X_RANGE_M,
         }
     }
 
@@ -208,6 +227,13 @@ impl RealTable {
                     requirement: "rate_hz > 0 and noise, latency, quantization finite and >= 0",
                 });
             }
+        }
+        let [x_lo, x_hi] = self.x_range_m;
+        if !(x_lo <= 0.0 && x_hi >= 0.0 && x_lo < x_hi) {
+            return Err(PlanarError::Relation {
+                param: "real_table.stage",
+                requirement: "min_m <= 0 <= max_m, min_m < max_m",
+            });
         }
         let sane = self.initial_tilt_rad.is_finite()
             && self.initial_height_m.is_finite()
@@ -733,7 +759,11 @@ impl<T: SinCos, C: Camera, A: Actuator, B: Actuator> SampledPlant<TiltController
     }
 
     fn advance(&mut self, _k: u64, t_next: f64) -> Result<ControlFlow<RunEnd>, ControllerError> {
+        let [lo, hi] = self.table.x_range_m;
         Ok(match self.advance_step(t_next) {
+            Ok(()) if !(lo..=hi).contains(&self.plant.body.x_m) => {
+                ControlFlow::Break(RunEnd::OutOfTravel)
+            }
             Ok(()) => ControlFlow::Continue(()),
             Err(e) => ControlFlow::Break(e),
         })

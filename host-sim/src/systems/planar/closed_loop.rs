@@ -64,13 +64,21 @@ impl TableSink for Streams<'_> {
     }
 }
 
+/// An f32 parameter as the scene's decimal value (the f32's shortest form), not its widened
+/// binary.
+fn decimal(v: f32) -> f64 {
+    v.to_string().parse().unwrap_or(f64::NAN)
+}
+
 /// The scene's real-table figures before the run's counts are in.
 fn figures(table: &RealTable) -> RealFigures {
     let c = &table.controller;
     RealFigures {
         control_rate_hz: (1.0 / f64::from(c.dt_s) * 1e3).round() / 1e3,
-        // the scene's decimal value (the f32's shortest form), not its widened binary
-        kappa_rate_s: c.kappa_rate_s.to_string().parse().unwrap_or(f64::NAN),
+        kappa_rate_s: decimal(c.kappa_rate_s),
+        kappa_x_pm: decimal(c.kappa_x_pm),
+        kappa_xdot_spm: decimal(c.kappa_xdot_spm),
+        x_range_m: table.x_range_m,
         contact_iterations: c.contact_iterations,
         camera_noise_m: table.camera.map(|k| k.noise_m),
         camera_noise_rad: table.camera.map(|k| k.noise_rad),

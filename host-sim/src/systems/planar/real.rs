@@ -65,6 +65,18 @@ pub struct StrokeDrive {
     pub accel_max_mps2: f64,
 }
 
+/// `[real_table.stage]`: the x range the table can be under the body's centre of mass, m
+/// (its x stage's travel plus the table's half length): the run ends `out_of_travel` when
+/// the centre of mass leaves it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StageTable {
+    /// Lowest x, m (<= 0: the body starts at x = 0).
+    pub min_m: f64,
+    /// Highest x, m (>= 0).
+    pub max_m: f64,
+}
+
 /// `[real_table.camera]`: the camera (noise seed: `planar.seed`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -93,6 +105,11 @@ pub struct RealTableScene {
     pub control_rate_hz: f64,
     /// kappa_w of the tilt-rate term, s (0 = the paper's law; `TiltParams::kappa_rate_s`).
     pub kappa_rate_s: f64,
+    /// kappa_x of the horizontal regulation term, rad/m (0 = the paper's law;
+    /// `TiltParams::kappa_x_pm`).
+    pub kappa_x_pm: f64,
+    /// kappa_x' of the same term on x', s/m (`TiltParams::kappa_xdot_spm`).
+    pub kappa_xdot_spm: f64,
     /// Safeguarded Newton steps per period for eq. 7's contact time, 1 ..= 4.
     pub contact_iterations: u8,
     /// `limited` or `ideal`.
@@ -103,6 +120,8 @@ pub struct RealTableScene {
     pub tilt: TiltDrive,
     /// The stroke drive.
     pub stroke: StrokeDrive,
+    /// The x range under the body.
+    pub stage: StageTable,
     /// The camera.
     pub camera: CameraTable,
 }
@@ -117,6 +136,8 @@ impl Default for RealTableScene {
         Self {
             control_rate_hz: (1.0 / f64::from(c.dt_s)).round(),
             kappa_rate_s: f64::from(c.kappa_rate_s),
+            kappa_x_pm: f64::from(c.kappa_x_pm),
+            kappa_xdot_spm: f64::from(c.kappa_xdot_spm),
             contact_iterations: c.contact_iterations,
             drives: Drives::Limited,
             max_duration_s: t.max_duration_s,
@@ -131,6 +152,10 @@ impl Default for RealTableScene {
                 max_m: f64::from(c.stroke.max_m),
                 velocity_max_mps: f64::from(c.stroke.velocity_max_mps),
                 accel_max_mps2: f64::from(c.stroke.accel_max_mps2),
+            },
+            stage: StageTable {
+                min_m: t.x_range_m[0],
+                max_m: t.x_range_m[1],
             },
             camera: CameraTable {
                 enabled: true,
@@ -154,6 +179,21 @@ impl Default for TiltDrive {
 impl Default for StrokeDrive {
     fn default() -> Self {
         RealTableScene::default().stroke
+    }
+}
+
+impl Default for StageTable {
+    fn default() -> Self {
+        RealTableScene::default().stage
+    }
+}
+
+impl StageTable {
+    fn range(&self) -> Result<[f64; 2], SceneError> {
+        check("real_table.stage.min_m", self.min_m, -1e3, 0.0, false)?;
+        check("real_table.stage.max_m", self.max_m, 0.0, 1e3, false)?;
+        ordered("real_table.stage.max_m", self.min_m, self.max_m)?;
+        Ok([self.min_m, self.max_m])
     }
 }
 
@@ -305,6 +345,14 @@ impl RealTableScene {
             0.1,
             false,
         )?;
+        check("real_table.kappa_x_pm", self.kappa_x_pm, 0.0, 1.0, false)?;
+        check(
+            "real_table.kappa_xdot_spm",
+            self.kappa_xdot_spm,
+            0.0,
+            1.0,
+            false,
+        )?;
         if !(1..=4).contains(&self.contact_iterations) {
             return Err(SceneError::new(
                 "real_table.contact_iterations",
@@ -319,6 +367,7 @@ impl RealTableScene {
             true,
         )?;
         let (tilt, stroke) = (self.tilt.limits()?, self.stroke.limits()?);
+        let x_range_m = self.stage.range()?;
         let camera = self.camera.config(p.seed)?;
         let mut base = self.controller_base(&tilt, &stroke);
         base.commit_s = self.commit_s(camera.as_ref())?;
@@ -333,6 +382,7 @@ impl RealTableScene {
             initial_tilt_rad: 0.0,
             initial_height_m: 0.0,
             max_duration_s: self.max_duration_s,
+            x_range_m,
         };
         table
             .validate(model)
@@ -378,6 +428,8 @@ impl RealTableScene {
         let mut c = TiltParams {
             dt_s: (1.0 / self.control_rate_hz) as f32,
             kappa_rate_s: self.kappa_rate_s as f32,
+            kappa_x_pm: self.kappa_x_pm as f32,
+            kappa_xdot_spm: self.kappa_xdot_spm as f32,
             contact_iterations: self.contact_iterations,
             ..TiltParams::default()
         };

@@ -163,6 +163,9 @@ pub(super) fn end_words(end: RunEnd) -> &'static str {
         RunEnd::Jam => "Painleve jam in a frictional impact",
         RunEnd::NonFinite => "a state became non-finite",
         RunEnd::TimeLimit => "the time limit (real_table.max_duration_s) passed",
+        RunEnd::OutOfTravel => {
+            "out of travel (the body left the table's x range, real_table.stage)"
+        }
     }
 }
 
@@ -322,6 +325,12 @@ pub struct RealFigures {
     pub control_rate_hz: f64,
     /// kappa_w of the tilt-rate term, s.
     pub kappa_rate_s: f64,
+    /// kappa_x of the horizontal regulation, rad/m.
+    pub kappa_x_pm: f64,
+    /// kappa_x' of the horizontal regulation, s/m.
+    pub kappa_xdot_spm: f64,
+    /// The x range the table can be under the centre of mass (`real_table.stage`), m.
+    pub x_range_m: [f64; 2],
     /// Newton steps per period for the contact time.
     pub contact_iterations: u8,
     /// The camera's noise on x and y (null: no camera, the true pose), m.
@@ -336,8 +345,8 @@ pub struct RealFigures {
     pub impact_time_error_rms_s: Option<f64>,
     /// Largest |actual - predicted| impact time, s.
     pub impact_time_error_max_s: Option<f64>,
-    /// Largest |x| of the centre of mass at an impact, m (the body wanders: the law does
-    /// not hold x).
+    /// Largest |x| of the centre of mass at an impact, m (the paper's law does not hold x;
+    /// the horizontal regulation does).
     pub max_abs_x_m: f64,
     /// Control steps taken.
     pub control_steps: u64,
@@ -361,12 +370,16 @@ impl RealFigures {
         };
         let _ = writeln!(
             o,
-            "  real table:   tilt controller at {} Hz, kappa_w {} s, {} Newton steps; {}; drives {}",
+            "  real table:   tilt controller at {} Hz, kappa_w {} s, kappa_x {} /m, kappa_x' {} s/m, {} Newton steps; {}; drives {}; x range {} .. {} m",
             self.control_rate_hz,
             self.kappa_rate_s,
+            self.kappa_x_pm,
+            self.kappa_xdot_spm,
             self.contact_iterations,
             camera,
-            if self.drives_limited { "limited" } else { "ideal" }
+            if self.drives_limited { "limited" } else { "ideal" },
+            self.x_range_m[0],
+            self.x_range_m[1]
         );
         let ms = |v: Option<f64>| v.map_or("-".to_string(), |s| format!("{:.3}", 1e3 * s));
         let _ = writeln!(
