@@ -187,11 +187,12 @@ pub struct TiltParams {
     /// impulse P along n = (-sin alpha, cos alpha)) and theta' by P l sin(theta - alpha) /
     /// (m rho^2): the body turns until alpha = theta. A bias d added to kappa theta thus
     /// moves the tilt mode's rest to theta = alpha = d / (1 - kappa), of the opposite sign
-    /// to d for kappa > 1 (-10 d at kappa 1.1). A slow bias (many impacts per tilt cycle,
-    /// which turns about 72 degrees per impact) acts through that rest: d = -kappa_x x
-    /// - kappa_x' x' gives alpha ~ (kappa_x x + kappa_x' x') / (kappa - 1) > 0 for x, x' >
-    /// 0, and the impacts push the body back towards x = 0, in the manner of the planar
-    /// juggler's horizontal regulation l(w) of b_x (Rizzi & Koditschek eq. 12). The plus
+    /// to d for kappa > 1 (-10 d at kappa 1.1). A bias that changes slowly against the
+    /// tilt cycle (about 72 degrees per impact, five impacts a cycle) acts through that
+    /// rest: the bias d = -(kappa_x x + kappa_x' x') gives alpha ~ (kappa_x x + kappa_x'
+    /// x') / (kappa - 1), positive for x, x' > 0, and the impacts push the body back
+    /// towards x = 0, in the manner of the planar juggler's horizontal regulation l(w) of
+    /// b_x (Rizzi & Koditschek eq. 12). The plus
     /// sign drives x' away and tips the body within tens of impacts (measured). Gains must
     /// stay small against the tilt mode: on the sec. 2.3 triangle kappa_x 0.002 /m and
     /// kappa_x' 0.005 s/m keep x within 0.5 m over 300 impacts, 0.005 and 0.02 tip it
