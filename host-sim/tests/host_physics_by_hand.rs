@@ -1,0 +1,197 @@
+//! Tests that catch physics mutants of the host's event engine (issue 22, "Tests that must
+//! fail"): the contact finder's guards and grazing tolerance (`engine/roots.rs`), the cheap
+//! contact test's coefficients (`engine/flight.rs`), and the plant's clock across surface
+//! segment switches (`model/line.rs`). Expected values are closed forms: ballistic flight,
+//! the quadratic's roots, and the documented grazing rule.
+
+use dexter_core::state::{BallState, PaddleState};
+use dexter_sim::effects::jitter::NoJitter;
+use dexter_sim::engine::roots::first_contact;
+use dexter_sim::engine::zeno::ZenoPolicy;
+use dexter_sim::engine::{Ballistic, Flight, FlightEnd, Poly};
+use dexter_sim::model::line::{Advance, LinePlant};
+use dexter_sim::model::surface::Surface;
+
+const G: f64 = 9.81;
+
+/// Any non-finite coefficient or window gives no contact, even where the finite ones alone
+/// would give one (a guard weakened to "all non-finite" or "any finite" lets these through).
+#[test]
+fn a_non_finite_coefficient_or_window_is_never_a_contact() {
+    let nan = f64::NAN;
+    let inf = f64::INFINITY;
+    for (c0, c1, c2, h) in [
+        (1.0, -1.0, 0.0, inf), // closing at 1 m/s: t = 1 would be in an infinite window
+        (1.0, -1.0, 0.0, nan), // the same, window NaN
+        (-1e-12, -1.0, nan, 1.0), // touching and closing, c2 NaN
+        (-inf, -1.0, 0.0, 1.0), // c0 -inf
+        (0.0, -1.0, inf, 1.0), // c2 inf
+        (1.0, -inf, 0.0, 1.0), // c1 -inf
+        (1.0, -1.0, -inf, 1.0), // c2 -inf
+    ] {
+        assert_eq!(first_contact(c0, c1, c2, h), None, "{c0} {c1} {c2} {h}");
+    }
+}
+
+/// A ball touching the paddle (gap 0) and closing is a contact now, at t = 0: closing at a
+/// speed (c1 < 0) is an impact, not a graze; closing by curvature only (c1 = 0, c2 < 0) is
+/// a graze.
+#[test]
+fn touching_and_closing_is_a_contact_at_once_and_a_graze_only_without_speed() {
+    let c = first_contact(0.0, -2.0, 1.0, 1.0).expect("closing at 2 m/s");
+    assert_eq!((c.time_s, c.grazing), (0.0, false));
+    let c = first_contact(-1e-15, -0.5, -4.9, 1.0).expect("closing, penetrating by rounding");
+    assert_eq!((c.time_s, c.grazing), (0.0, false));
+    let c = first_contact(0.0, 0.0, -4.9, 1.0)
+        .expect("at rest relative to the paddle, the gap curving down");
+    assert_eq!((c.time_s, c.grazing), (0.0, true));
+    // touching and separating with a paddle accelerating up less than gravity: the ball
+    // comes back at t = -c1/c2 (the other root of t (c1 + c2 t))
+    let c = first_contact(0.0, 2.0, -4.905, 1.0).expect("the ball falls back");
+    assert!((c.time_s - 2.0 / 4.905).abs() < 1e-12, "{}", c.time_s);
+    assert!(!c.grazing);
+}
+
+/// The grazing rule (module docs of `engine/roots.rs`): a tangency whose discriminant
+/// rounds below zero by at most 16 ulps of the terms' size, 16 eps (c1^2 + |4 c0 c2|),
+/// is a contact at the vertex -c1 / (2 c2); further below it is a miss. Built with
+/// c1 = -20, c2 = 1, c0 = 100 + k ulp(100): disc = -4 k ulp(100), tolerance 16 eps 800.
+#[test]
+fn a_tangency_within_the_documented_tolerance_is_a_graze_and_beyond_it_a_miss() {
+    let ulp = 100f64.next_up() - 100.0;
+    let tol = 16.0 * f64::EPSILON * 800.0;
+    let k_edge = tol / (4.0 * ulp); // 50: disc = -tol
+    assert!((k_edge - 50.0).abs() < 1e-9, "{k_edge}");
+    for k in [0u32, 10, 40, 48] {
+        let c0 = 100.0 + f64::from(k) * ulp;
+        let c = first_contact(c0, -20.0, 1.0, 20.0).unwrap_or_else(|| panic!("k = {k}"));
+        assert!(c.grazing, "k = {k}");
+        assert!((c.time_s - 10.0).abs() < 1e-9, "k = {k}: {}", c.time_s);
+    }
+    for k in [52u32, 60, 1000] {
+        let c0 = 100.0 + f64::from(k) * ulp;
+        assert_eq!(first_contact(c0, -20.0, 1.0, 20.0), None, "k = {k}");
+    }
+}
+
+/// A ball leaving a gap that has underflowed to the smallest subnormal comes back down at
+/// t = c1 / |c2| (the other root): the root at -0 of c0/q is not a contact (a window that
+/// let t = 0 in would re-impact at once, a Zeno chatter from rounding).
+#[test]
+fn leaving_a_subnormal_gap_the_next_contact_is_the_return() {
+    let c = first_contact(5e-324, 8.0, -1.0, 10.0).expect("the ball comes back");
+    assert!((c.time_s - 8.0).abs() < 1e-12, "{}", c.time_s);
+}
+
+/// `fly_short` rules contacts out from the same quadratic as `fly`: with the paddle
+/// accelerating up at 100 m/s^2 under a ball 0.1 m above it and at rest relative to it,
+/// the gap is 0.1 - (g + 100) t^2 / 2, zero at t = sqrt(0.2 / (g + 100)); both find it.
+#[test]
+fn the_cheap_contact_test_sees_a_paddle_accelerating_into_the_ball() {
+    let paddle = Poly {
+        height_m: 0.0,
+        velocity_mps: 1.0,
+        accel_mps2: 100.0,
+    };
+    let t = (0.2 / (G + 100.0)).sqrt();
+    for short in [false, true] {
+        let mut ball = BallState::new(0.1, 1.0);
+        let end = match short {
+            true => Ballistic.fly_short(&mut ball, &paddle, 0.1, G),
+            false => Ballistic.fly(&mut ball, &paddle, 0.1, G),
+        };
+        match end {
+            FlightEnd::Contact { dt_s, grazing } => {
+                assert!((dt_s - t).abs() < 1e-12, "short {short}: {dt_s} vs {t}");
+                assert!(!grazing);
+            }
+            other => panic!("short {short}: {other:?}"),
+        }
+        assert!((ball.height_m - paddle.height_at(t)).abs() < 1e-12);
+    }
+}
+
+/// A fixed table at height 0 whose segments end every `every_s` (as an actuator's regime
+/// switches would): the plant's clock must add up the segments exactly.
+#[derive(Clone, Copy, Debug)]
+struct SwitchingTable {
+    every_s: f64,
+    into_segment_s: f64,
+    switches: u64,
+}
+
+impl Surface for SwitchingTable {
+    fn poly(&self) -> Poly {
+        Poly::default()
+    }
+    fn max_segment_s(&self, _within_s: f64) -> f64 {
+        self.every_s - self.into_segment_s
+    }
+    fn advance(&mut self, dt_s: f64, to_switch: bool) {
+        if to_switch {
+            self.into_segment_s = 0.0;
+            self.switches += 1;
+        } else {
+            self.into_segment_s += dt_s;
+        }
+    }
+    fn at_impact(&self, _ball: &BallState<f64>, _g: f64) -> (f64, f64) {
+        (0.0, 0.0)
+    }
+    fn state(&self, _ball: &BallState<f64>) -> PaddleState<f64> {
+        PaddleState::new(0.0, 0.0)
+    }
+    fn command(&mut self, _accel_mps2: f64) {}
+    fn rest_is_final(&self) -> bool {
+        false
+    }
+}
+
+fn plant(ball: BallState<f64>, restitution: f64) -> LinePlant<Ballistic, SwitchingTable, NoJitter> {
+    let table = SwitchingTable {
+        every_s: 1e-3,
+        into_segment_s: 0.0,
+        switches: 0,
+    };
+    let zeno = ZenoPolicy {
+        velocity_threshold_mps: 1e-6,
+        relative_threshold: 0.0,
+        max_impacts_per_segment: 64,
+    };
+    LinePlant::new(G, restitution, Ballistic, table, NoJitter, zeno, ball)
+}
+
+/// Dropped from 1 m onto a table whose segments switch every millisecond, the ball lands
+/// at sqrt(2 / g) and, with e = 0.5, again 2 e sqrt(2 / g) later: the clock adds up the
+/// ~450 and ~450 flight segments across the switches exactly, and it ends at the
+/// requested time.
+#[test]
+fn the_clock_adds_up_flight_segments_across_switches() {
+    let mut p = plant(BallState::new(1.0, 0.0), 0.5);
+    let mut times = Vec::new();
+    let end = p.advance_to(1.5, 2, &mut |r| times.push(r.time_s));
+    assert_eq!(end, Advance::ImpactLimit);
+    let t1 = (2.0 / G).sqrt();
+    let t2 = t1 + 2.0 * 0.5 * t1;
+    assert!((times[0] - t1).abs() < 1e-9, "{} vs {t1}", times[0]);
+    assert!((times[1] - t2).abs() < 1e-9, "{} vs {t2}", times[1]);
+    assert!(p.surface.switches >= 900, "{}", p.surface.switches);
+    assert_eq!(p.advance_to(2.0, 10, &mut |_| {}), Advance::ImpactLimit);
+    let mut q = plant(BallState::new(1.0, 0.0), 0.5);
+    assert_eq!(q.advance_to(0.3, 10, &mut |_| {}), Advance::Reached);
+    assert_eq!(q.time_s, 0.3);
+    assert!((q.ball.height_m - (1.0 - 0.5 * G * 0.09)).abs() < 1e-12);
+}
+
+/// A ball at rest on the switching table rides it across every switch: the clock reaches
+/// the requested time and the ball stays on the table.
+#[test]
+fn the_clock_adds_up_a_ride_across_switches() {
+    let mut p = plant(BallState::new(0.0, 0.0), 0.0);
+    p.resting = true;
+    assert_eq!(p.advance_to(0.0105, 10, &mut |_| {}), Advance::Reached);
+    assert_eq!(p.time_s, 0.0105);
+    assert_eq!(p.surface.switches, 10);
+    assert_eq!((p.ball.height_m, p.ball.velocity_mps), (0.0, 0.0));
+    assert_eq!(p.impacts, 0);
+}
