@@ -7,7 +7,7 @@
 //! - [`sweep_thrust`]: bifurcation-diagram points (tau, late E_n values) over the thrust.
 //! - [`locate_first_doubling`]: the first period doubling, by bisection on the detected
 //!   period with a bounded number of steps.
-//! - [`Eq15`], [`Eq15InEnergy`], [`Eq19Family`], [`certificate`], [`cascade`]: the
+//! - [`Eq15`], [`Eq15InEnergy`], [`Eq19Family`], [`certificate`], [`cascade()`]: the
 //!   Singer–Guckenheimer certificate of the simplified nonlinear model (sec. 4.1, Lemmas
 //!   1–3, Theorem 1) on the conjugate of eq. 15 by eq. 18, and its doubling cascade.
 

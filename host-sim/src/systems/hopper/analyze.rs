@@ -246,7 +246,7 @@ pub struct Analysis<'a> {
     linear: Option<Linear>,
 }
 
-/// Doublings of eq. 19 located by [`Global`] (Theorem 1: at least six).
+/// Doublings of eq. 19 located by `Global` (Theorem 1: at least six).
 pub const DOUBLINGS: usize = 6;
 
 /// Feigenbaum's constant δ = 4.669201609... (Feigenbaum 1978), for comparison.
