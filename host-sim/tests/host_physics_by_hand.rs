@@ -83,31 +83,42 @@ fn leaving_a_subnormal_gap_the_next_contact_is_the_return() {
     assert!((c.time_s - 8.0).abs() < 1e-12, "{}", c.time_s);
 }
 
-/// `fly_short` rules contacts out from the same quadratic as `fly`: with the paddle
-/// accelerating up at 100 m/s^2 under a ball 0.1 m above it and at rest relative to it,
-/// the gap is 0.1 - (g + 100) t^2 / 2, zero at t = sqrt(0.2 / (g + 100)); both find it.
+/// `fly_short` rules contacts out from the same quadratic as `fly`, and both find the
+/// contact at its closed-form time:
+/// - the paddle accelerating up at 100 m/s^2 under a ball 0.1 m above it and at rest
+///   relative to it: gap 0.1 - (g + 100) t^2 / 2, zero at t = sqrt(0.2 / (g + 100));
+/// - a paddle in free fall (acceleration -g: no quadratic term) rising at 1 m/s into a
+///   ball 0.1 m above it falling at 1 m/s: gap 0.1 - 2 t, zero at t = 0.05 s.
+///
+/// Both sit a metre up, so a gap taken as a sum of heights, or a closing speed as a sum of
+/// speeds, would wrongly rule the contact out.
 #[test]
 fn the_cheap_contact_test_sees_a_paddle_accelerating_into_the_ball() {
-    let paddle = Poly {
-        height_m: 0.0,
-        velocity_mps: 1.0,
-        accel_mps2: 100.0,
-    };
-    let t = (0.2 / (G + 100.0)).sqrt();
-    for short in [false, true] {
-        let mut ball = BallState::new(0.1, 1.0);
-        let end = match short {
-            true => Ballistic.fly_short(&mut ball, &paddle, 0.1, G),
-            false => Ballistic.fly(&mut ball, &paddle, 0.1, G),
+    let cases = [
+        (1.1, 1.0, 1.0, 1.0, 100.0, (0.2 / (G + 100.0)).sqrt()),
+        (1.1, -1.0, 1.0, 1.0, -G, 0.05),
+    ];
+    for (ball_h, ball_v, pad_h, pad_v, pad_a, t) in cases {
+        let paddle = Poly {
+            height_m: pad_h,
+            velocity_mps: pad_v,
+            accel_mps2: pad_a,
         };
-        match end {
-            FlightEnd::Contact { dt_s, grazing } => {
-                assert!((dt_s - t).abs() < 1e-12, "short {short}: {dt_s} vs {t}");
-                assert!(!grazing);
+        for short in [false, true] {
+            let mut ball = BallState::new(ball_h, ball_v);
+            let end = match short {
+                true => Ballistic.fly_short(&mut ball, &paddle, 0.1, G),
+                false => Ballistic.fly(&mut ball, &paddle, 0.1, G),
+            };
+            match end {
+                FlightEnd::Contact { dt_s, grazing } => {
+                    assert!((dt_s - t).abs() < 1e-12, "short {short}: {dt_s} vs {t}");
+                    assert!(!grazing);
+                }
+                other => panic!("short {short}, paddle {pad_a}: {other:?}"),
             }
-            other => panic!("short {short}: {other:?}"),
+            assert!((ball.height_m - paddle.height_at(t)).abs() < 1e-12);
         }
-        assert!((ball.height_m - paddle.height_at(t)).abs() < 1e-12);
     }
 }
 
