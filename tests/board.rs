@@ -3,9 +3,9 @@
 //! and stay within its budgets, and the documents quote the expected file. Regenerate on
 //! purpose with `DEXTER_BLESS=1 cargo test -p dexter-tests --test board`.
 //!
-//! The image cannot run here (no board; QEMU's netduinoplus2 hangs in its clock setup, see
-//! firmware/README.md), so what runs of it on the host is its board-independent code:
-//! `cargo test -p dexter-drivers`, and the serial-port HIL link in `dexter-sim`.
+//! The image itself cannot run here (QEMU's netduinoplus2 hangs in its HSE clock setup, see
+//! firmware/README.md, "Emulation"); the same image on the internal oscillator (feature
+//! `qemu-hsi`) runs in the loop under emulation in `host-sim/tests/board_hil.rs`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -34,8 +34,14 @@ use core::sync::atomic::AtomicBool;
 /// The control rate of the juggling loop, Hz: the line controller's `dt_s` must be its
 /// inverse (checked at start).
 pub const CONTROL_RATE_HZ: u32 = 500;
-/// Core clock, Hz (HSE 8 MHz from the ST-LINK's MCO, PLL to the F446's 180 MHz maximum).
+/// Core clock, Hz (HSE 8 MHz from the ST-LINK's MCO, PLL to the F446's 180 MHz maximum; with
+/// the `qemu-hsi` feature, the 16 MHz internal oscillator, no PLL). The control period is
+/// counted from the frozen clocks the HAL reports, not from this constant.
+#[cfg(not(feature = "qemu-hsi"))]
 pub const SYSCLK_HZ: u32 = 180_000_000;
+/// Core clock, Hz: the 16 MHz internal oscillator (feature `qemu-hsi`).
+#[cfg(feature = "qemu-hsi")]
+pub const SYSCLK_HZ: u32 = 16_000_000;
 /// The host link's rate, Bd (the ST-LINK/V2-1 VCP carries up to 2 MBd).
 pub const VCP_BAUD: u32 = 921_600;
 
@@ -89,9 +95,12 @@ mod app {
     fn init(cx: init::Context) -> (Shared, Local) {
         let mut core = cx.core;
         let dp = cx.device;
+        #[cfg(not(feature = "qemu-hsi"))]
         let clocks = Clocks::hse(8.MHz())
             .bypass_hse_oscillator()
             .sysclk(SYSCLK_HZ.Hz());
+        #[cfg(feature = "qemu-hsi")]
+        let clocks = Clocks::hsi().sysclk(SYSCLK_HZ.Hz());
         let mut rcc = dp.RCC.freeze(clocks);
         let steps = DwtCycles::new(&mut core.DCB, &mut core.DWT);
         let server_steps = DwtCycles::new(&mut core.DCB, &mut core.DWT);

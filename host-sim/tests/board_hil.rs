@@ -1,0 +1,221 @@
+//! The NUCLEO-F446RE image in the loop under emulation: the board crate built with its
+//! `qemu-hsi` feature (the same image on the 16 MHz internal oscillator, which QEMU's
+//! netduinoplus2 can run: it does not model the RCC, so the HSE-ready poll of the real
+//! image never ends there) boots in `qemu-system-arm -machine netduinoplus2` (STM32F405:
+//! the same Cortex-M4F core and USARTs), with USART2, the board's host link, on a
+//! pseudo-terminal QEMU allocates. `dexter run SCENE --hil --port PTY` then drives the
+//! board's RTIC app, the HAL's USART driver, its receive ring, the switch into HIL mode and
+//! the lock-step server, for every controller kind the image hosts: the line juggler, the
+//! tilt table, the hopper, the one-joint arm (the CLI) and the link check (`Echo`,
+//! through the library). Each run must agree with the host's shadow core bit for bit and
+//! end with the same summary as the SIL run of the scene. After each host's `Stop` the
+//! board resets (`SCB::sys_reset`, which QEMU models), so one emulator serves all runs.
+//!
+//! What the emulator does not model (firmware/README.md, "Emulation"): DWT's cycle
+//! counter reads 0 (so the step figures are 0 and no budget is applied, as on any
+//! `--port` run without `--budget`), TIM1 (the motor PWM) and the GPIOs are unimplemented
+//! devices, and TIM3 counts freely instead of decoding the encoder.
+//!
+//! QEMU is stopped by its pid when the test ends, also when it fails.
+
+mod common;
+
+use common::scene;
+use dexter_core::echo::{Echo, EchoFrame, EchoParams};
+use dexter_core::fixed_rate::Fault;
+use dexter_sim::controller::StepController;
+use dexter_sim::hil::{HilOptions, LockStep, SerialPortOptions};
+use serde_json::Value;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+const CRATE: &str = "dexter-nucleo-f446re";
+/// How long QEMU may take to announce its pseudo-terminal.
+const BOOT_TIMEOUT: Duration = Duration::from_secs(10);
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .canonicalize()
+        .unwrap()
+}
+
+/// Build the board image with `qemu-hsi` (release) and copy it beside the real image as
+/// `dexter-nucleo-f446re-qemu-hsi.elf`, so that a later build of the real image (the size
+/// test, `scripts/test.sh`) does not replace it.
+fn emulated_board_image() -> PathBuf {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = Command::new(cargo)
+        .current_dir(workspace())
+        .args(["build", "-p", CRATE, "--release", "--target", TARGET])
+        .args(["--features", "qemu-hsi"])
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "building {CRATE} --features qemu-hsi failed (install the target with `rustup target add {TARGET}`):\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(|d| workspace().join(d))
+        .unwrap_or_else(|| workspace().join("target"));
+    let release = target.join(TARGET).join("release");
+    let copy = release.join(format!("{CRATE}-qemu-hsi.elf"));
+    std::fs::copy(release.join(CRATE), &copy).expect("copy the emulated board's image");
+    copy
+}
+
+/// The emulated board: QEMU's pid is killed and waited for on drop.
+struct Emulator {
+    qemu: Child,
+    port: String,
+}
+
+impl Emulator {
+    /// Boot `elf` in netduinoplus2 with USART1 on nothing and USART2 on a pseudo-terminal;
+    /// the port is the one QEMU names on stdout ("char device redirected to /dev/pts/N").
+    fn boot(elf: &Path) -> Self {
+        let mut qemu = Command::new("qemu-system-arm")
+            .args([
+                "-machine",
+                "netduinoplus2",
+                "-nographic",
+                "-monitor",
+                "none",
+            ])
+            .args(["-serial", "null", "-serial", "pty", "-kernel"])
+            .arg(elf)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("qemu-system-arm runs (apt-get install qemu-system-arm)");
+        let stdout = qemu.stdout.take().unwrap();
+        let (tx, rx) = mpsc::channel();
+        // Reads QEMU's stdout to its end, so QEMU never blocks on a full pipe.
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+        let mut emulator = Emulator {
+            qemu,
+            port: String::new(),
+        };
+        let mut seen = Vec::new();
+        while let Ok(line) = rx.recv_timeout(BOOT_TIMEOUT) {
+            if let Some(at) = line.find("/dev/pts/") {
+                emulator.port = line[at..].split_whitespace().next().unwrap().to_string();
+                return emulator;
+            }
+            seen.push(line);
+        }
+        panic!("QEMU named no pseudo-terminal within {BOOT_TIMEOUT:?}; it said: {seen:?}");
+    }
+}
+
+impl Drop for Emulator {
+    fn drop(&mut self) {
+        let _ = self.qemu.kill();
+        let _ = self.qemu.wait();
+    }
+}
+
+/// Keys whose values differ between a HIL run and its SIL run by design.
+fn differs_by_design(key: &str) -> bool {
+    [
+        "wall",
+        "hil",
+        "controller",
+        "step_instructions",
+        "sil_",
+        "link_",
+        "over_budget",
+    ]
+    .iter()
+    .any(|k| key.contains(k))
+}
+
+/// Every key of the SIL summary (outside those that differ by design) has the same value
+/// in the HIL summary: the same physics driven by the same commands.
+fn assert_same_outcome(name: &str, sil: &Value, hil: &Value) {
+    let sil = sil.as_object().expect("an object");
+    assert!(sil.len() > 5, "{name}: {sil:?}");
+    for (key, value) in sil.iter().filter(|(k, _)| !differs_by_design(k)) {
+        assert_eq!(
+            Some(value),
+            hil.get(key),
+            "{name}: `{key}` differs from SIL"
+        );
+    }
+}
+
+fn run(args: &[&str]) -> Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_dexter"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "dexter {args:?} failed ({}):\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+/// The HIL figures of a summary: top level (line, planar, hopper) or under `hil` (arm).
+fn hil_figures(v: &Value) -> &Value {
+    v.get("hil").unwrap_or(v)
+}
+
+/// The four kinds with a scene, through the CLI, then the link check through the library.
+#[test]
+fn every_hosted_kind_runs_on_the_emulated_board_bit_for_bit_against_sil() {
+    let board = Emulator::boot(&emulated_board_image());
+    // (scene, events: short runs (an arm scene is one motion), where the summary counts
+    // the control steps, the fewest it must count)
+    let runs = [
+        ("line-juggler", Some("3"), "/control_steps", 500),
+        ("planar-triangle-sil", Some("3"), "/control_steps", 200),
+        ("hopper-raibert-sil", Some("2"), "/control_steps", 500),
+        ("arm-throw", None, "/tracked/steps", 500),
+    ];
+    for (name, events, steps_at, min_steps) in runs {
+        let path = scene(name);
+        let mut args = vec!["run", &path, "--json"];
+        if let Some(n) = events {
+            args.extend(["--impacts", n]);
+        }
+        let sil = run(&args);
+        args.extend(["--hil", "--port", &board.port]);
+        let hil = run(&args);
+        let figures = hil_figures(&hil);
+        assert_eq!(figures["sil_mismatches"], 0, "{name}: {figures}");
+        assert_eq!(figures["link_errors"], 0, "{name}: {figures}");
+        assert_eq!(figures["link_timeouts"], 0, "{name}: {figures}");
+        let steps = hil.pointer(steps_at).and_then(Value::as_u64).unwrap_or(0);
+        assert!(steps >= min_steps, "{name}: {steps} steps: {hil}");
+        // DWT's cycle counter reads 0 in QEMU 7.2: a non-zero figure means another machine.
+        assert_eq!(figures["step_instructions_max"], 0, "{name}: {figures}");
+        assert_same_outcome(name, &sil, &hil);
+    }
+    let opts = HilOptions {
+        serial: Some(SerialPortOptions::new(&board.port)),
+        ..HilOptions::default()
+    };
+    let gain = -2.5f32;
+    let mut hil = LockStep::<Echo>::start(EchoParams { gain }, opts).expect("Echo on the board");
+    for seq in 0..200u32 {
+        let value = seq as f32 * 0.25 - 7.0;
+        let out = hil.step(&EchoFrame { seq, value }).expect("step").command;
+        assert_eq!(out.fault, Fault::None, "{seq}");
+        assert_eq!(out.value.to_bits(), (gain * value).to_bits(), "{seq}");
+    }
+    let report = hil.finish().expect("a clean Stop");
+    assert_eq!(report.sil_mismatches, 0, "{report:?}");
+}
