@@ -81,6 +81,33 @@ fn sections(b: &[u8]) -> Vec<(u64, u64, usize, usize, usize)> {
         .collect()
 }
 
+/// The `len` bytes the image holds at address `addr` (in a section with file contents).
+fn bytes_at(b: &[u8], addr: u64, len: usize) -> Option<&[u8]> {
+    let shoff = u32_at(b, 0x20) as usize;
+    let (entsize, count) = (u16_at(b, 0x2e), u16_at(b, 0x30));
+    (0..count).find_map(|i| {
+        let h = shoff + i * entsize;
+        let (ty, start) = (u32_at(b, h + 4), u32_at(b, h + 12));
+        let (off, size) = (u32_at(b, h + 16) as usize, u32_at(b, h + 20) as u64);
+        const NOBITS: u64 = 8;
+        let inside =
+            ty != NOBITS && start != 0 && addr >= start && addr + len as u64 <= start + size;
+        inside.then(|| &b[off + (addr - start) as usize..][..len])
+    })
+}
+
+/// The size of symbol `name` (its `st_size`).
+fn symbol_size(b: &[u8], name: &str) -> Option<u64> {
+    let all = sections(b);
+    let &(_, _, off, size, link) = all.iter().find(|s| s.0 == 2)?;
+    let strtab = all[link].2;
+    (off..off + size).step_by(16).find_map(|sym| {
+        let at = strtab + u32_at(b, sym) as usize;
+        let end = b[at..].iter().position(|&c| c == 0)?;
+        (&b[at..at + end] == name.as_bytes()).then(|| u32_at(b, sym + 8))
+    })
+}
+
 fn symbol(b: &[u8], name: &str) -> Option<u64> {
     let all = sections(b);
     let &(_, _, off, size, link) = all.iter().find(|s| s.0 == 2)?; // SHT_SYMTAB
@@ -184,10 +211,55 @@ fn check_block(doc: &Path, block: &str) {
     );
 }
 
-/// One test, so the image is built once: golden sizes, budgets, documents.
+/// The `Configure` frame a HIL host sends for `scenes/line-juggler.toml`: the scene
+/// validated and turned into the core's parameters by the simulator, encoded by the core's
+/// protocol (`LockStep::start` sends exactly `HostMessage::Configure(C::config(params))`).
+fn host_configure() -> Vec<u8> {
+    use dexter_core::control::Controller;
+    use dexter_core::fixed_rate::FixedRate;
+    use dexter_core::protocol::{encode, HostMessage, Wire, MAX_FRAME_LEN};
+    let scene = dexter_tests::load_scene("line-juggler", &[]);
+    let params = scene.controller_params().expect("a sil scene");
+    <Controller as FixedRate>::new(params).expect("the core accepts the scene's tuning");
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    let n = encode(
+        &HostMessage::Configure(Controller::config(params)),
+        &mut buf,
+    )
+    .unwrap();
+    buf[..n].to_vec()
+}
+
+/// The stand-alone loop runs the scene's controller, bit for bit: the `Configure` frame
+/// linked into the board image (symbol `DEXTER_SCENE_CONFIGURE`, which `scene_params`
+/// decodes at reset) and the checked-in `scene.configure` it is built from are the
+/// host's frame for the line juggler's scene. (`dexter board scenes/line-juggler.toml
+/// --write boards/nucleo-f446re/scene.configure` regenerates the file.)
+fn assert_the_board_runs_the_scenes_controller(elf: &[u8]) {
+    let host = host_configure();
+    let file = std::fs::read(board_dir().join("scene.configure")).unwrap();
+    assert_eq!(
+        file, host,
+        "boards/nucleo-f446re/scene.configure is not scenes/line-juggler.toml's Configure: \
+         run `dexter board scenes/line-juggler.toml --write boards/nucleo-f446re/scene.configure`"
+    );
+    let addr = symbol(elf, "DEXTER_SCENE_CONFIGURE").expect("DEXTER_SCENE_CONFIGURE in the image");
+    let len = symbol_size(elf, "DEXTER_SCENE_CONFIGURE").unwrap() as usize;
+    assert_eq!(len, host.len(), "the linked frame's length");
+    let linked = bytes_at(elf, addr, len).expect("the frame's bytes in a loaded section");
+    assert_eq!(
+        linked,
+        &host[..],
+        "the board's built-in Configure is not the host's"
+    );
+}
+
+/// One test, so the image is built once: golden sizes, budgets, documents, the scene.
 #[test]
 fn the_board_image_builds_fits_its_budgets_and_matches_the_expected_sizes() {
-    let s = sizes(&board_elf());
+    let elf = board_elf();
+    assert_the_board_runs_the_scenes_controller(&std::fs::read(&elf).unwrap());
+    let s = sizes(&elf);
     let actual = sizes_text(&s);
     let expected_path = board_dir().join("expected/sizes.txt");
     if bless() {

@@ -219,3 +219,63 @@ fn every_hosted_kind_runs_on_the_emulated_board_bit_for_bit_against_sil() {
     let report = hil.finish().expect("a clean Stop");
     assert_eq!(report.sil_mismatches, 0, "{report:?}");
 }
+
+/// `dexter board`: the camera the board's stand-alone loop needs for a scene. The line
+/// juggler's scene steps at 500 Hz, and the core faults `Stale` after more than
+/// `stale_limit_steps` (5 by default, `ControllerParams::default`) periods without a new
+/// image: at least 500 / 5 = 100 frames/s; the estimator compensates `sensor.latency_s`
+/// (4 ms in the scene). `--write` writes the Configure frame (the checked-in
+/// `boards/nucleo-f446re/scene.configure` for this scene, which `tests/board.rs` checks
+/// against the image); a scene of another system, or another control rate, is refused
+/// naming the key (exit 2).
+#[test]
+fn board_prints_the_camera_the_scene_needs_and_writes_its_configure() {
+    let dir = common::scratch("board-verb");
+    let out = dir.join("scene.configure");
+    let v = run(&[
+        "board",
+        &scene("line-juggler"),
+        "--json",
+        "--write",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(v["control_rate_hz"], 500.0, "{v}");
+    assert_eq!(v["camera_min_rate_fps"], 100.0, "{v}");
+    assert_eq!(v["camera_max_interval_s"], 0.01, "{v}");
+    assert!(
+        (v["camera_latency_s"].as_f64().unwrap() - 0.004).abs() < 1e-9,
+        "{v}"
+    );
+    let checked_in = workspace().join("boards/nucleo-f446re/scene.configure");
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        std::fs::read(checked_in).unwrap()
+    );
+    assert_eq!(v["configure_bytes"], std::fs::read(&out).unwrap().len());
+    // a longer stale limit asks less of the camera: 500 / 20 = 25 frames/s
+    let v = run(&[
+        "board",
+        &scene("line-juggler"),
+        "--json",
+        "--set",
+        "control.stale_limit_steps=20",
+    ]);
+    assert_eq!(v["camera_min_rate_fps"], 25.0, "{v}");
+    for (args, names) in [
+        (vec!["--set", "control.rate_hz=400"], "control.rate_hz"),
+        (vec![], "arm"),
+    ] {
+        let path = if names == "arm" {
+            scene("arm-throw")
+        } else {
+            scene("line-juggler")
+        };
+        let mut all = vec!["board", path.as_str()];
+        all.extend(args);
+        let out = common::dexter(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains(names), "{err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -8,8 +8,11 @@
 //!   an overrun answered with the core's safe command (`dexter_drivers::periodic`). Once a
 //!   second the period task hands a snapshot to `telemetry` (software task, priority 1),
 //!   which logs it with defmt over RTT.
-//! - **hardware in the loop**: the first byte a host sends on the VCP ends the juggling
-//!   loop for good (the motor is parked, duty 0, and TIM2 stops): `idle` runs the
+//! - **juggling** runs the controller of the scene chosen at build time
+//!   ([`DEXTER_SCENE_CONFIGURE`], `dexter board SCENE --write FILE`), not a default tuning.
+//! - **hardware in the loop**: the first valid `Configure` frame a host sends on the VCP
+//!   (decoded and accepted by the lock-step server; noise or a UART error does not) ends
+//!   the juggling loop for good (the motor is parked, duty 0, and TIM2 stops): `idle` runs the
 //!   board-neutral lock-step server (`dexter_firmware::server::Server`) on the VCP, exactly
 //!   as the QEMU image does, and the host's simulated plant closes the loop
 //!   (`dexter run SCENE --hil --port /dev/ttyACM0`). After the host's `Stop` the board
@@ -45,8 +48,49 @@ pub const SYSCLK_HZ: u32 = 16_000_000;
 /// The host link's rate, Bd (the ST-LINK/V2-1 VCP carries up to 2 MBd).
 pub const VCP_BAUD: u32 = 921_600;
 
-/// Set by the VCP's receive interrupt at the first byte: a host drives the board from now.
+/// Set when the lock-step server accepts a host's `Configure` ([`HostSession`]): a host
+/// drives the board from now.
 static HOST_SESSION: AtomicBool = AtomicBool::new(false);
+
+/// The scene's `Configure` frame the stand-alone loop runs (`build.rs`:
+/// `DEXTER_BOARD_CONFIGURE`, from `dexter board SCENE --write FILE`), the bytes a host would
+/// send. Kept under this symbol so that `tests/board.rs` can compare it with the host's.
+#[no_mangle]
+#[used]
+pub static DEXTER_SCENE_CONFIGURE: [u8; SCENE_CONFIGURE_LEN] =
+    *include_bytes!(concat!(env!("OUT_DIR"), "/scene.configure"));
+const SCENE_CONFIGURE_LEN: usize =
+    include_bytes!(concat!(env!("OUT_DIR"), "/scene.configure")).len();
+
+/// Ends the stand-alone loop when a host's `Configure` is accepted.
+pub struct HostSession;
+
+impl dexter_firmware::server::SessionHook for HostSession {
+    fn configured(&mut self, _: dexter_core::protocol::Kind) {
+        HOST_SESSION.store(true, core::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+/// The stand-alone loop's controller parameters: [`DEXTER_SCENE_CONFIGURE`] decoded as a
+/// host's `Configure` is (a frame that is not a line juggler's stops the board at reset).
+fn scene_params() -> dexter_core::control::ControllerParams {
+    use dexter_core::protocol::{decode, Partial, MAX_FRAME_LEN};
+    use dexter_firmware::hosted::Params;
+    use dexter_firmware::server::HostMessage;
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    // Safety: a volatile read, so the bytes come from flash as linked (not constant-folded).
+    let frame = unsafe { core::ptr::read_volatile(&DEXTER_SCENE_CONFIGURE) };
+    let body = frame.split_last().map_or(&[][..], |(_, body)| body);
+    let Some(scratch) = buf.get_mut(..body.len()) else {
+        defmt::panic!("the scene's Configure frame is longer than a frame")
+    };
+    scratch.copy_from_slice(body);
+    match decode::<HostMessage>(scratch) {
+        Ok(HostMessage::Configure(Partial::Hosted(Params::Line(params)))) => params,
+        Ok(_) => defmt::panic!("the scene's Configure frame is not a line juggler's"),
+        Err(e) => defmt::panic!("the scene's Configure frame does not decode: {}", e),
+    }
+}
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [SPI1])]
 mod app {
@@ -54,7 +98,7 @@ mod app {
     use crate::rig::{self, BoardRig, Tim3Encoder, CAMERA_BAUD, PWM_HZ};
     use crate::tick::TickClock;
     use crate::uart_ring::{self, ErrorCount, RingLink, RingReader, RX_RING_LEN};
-    use crate::{CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD};
+    use crate::{HostSession, CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD};
     use core::sync::atomic::Ordering;
     use dexter_core::control::{Controller, ControllerParams};
     use dexter_drivers::periodic::{Deadline, Periodic};
@@ -88,7 +132,7 @@ mod app {
         vcp_ring: Producer<'static, RX_RING_LEN>,
         camera_rx: Rx<USART1, u8>,
         camera_ring: Producer<'static, RX_RING_LEN>,
-        server: Server<RingLink<USART2>, DwtCycles>,
+        server: Server<RingLink<USART2>, DwtCycles, HostSession>,
     }
 
     #[init]
@@ -131,9 +175,10 @@ mod app {
         let dir = gpiob.pb5.into_push_pull_output();
         let encoder = Tim3Encoder(dp.TIM3.qei((gpioa.pa6, gpioa.pa7), &mut rcc));
 
-        let params = ControllerParams::default();
+        let params = crate::scene_params();
         let (rig, periodic) = juggler(
             params,
+            rcc.clocks.sysclk().raw(),
             encoder,
             RingReader::new(camera_consumer, &CAMERA_ERRORS),
             pwm,
@@ -151,7 +196,11 @@ mod app {
             CONTROL_RATE_HZ,
             VCP_BAUD
         );
-        let server = Server::new(RingLink::new(vcp_consumer, vcp_tx), server_steps);
+        let server = Server::with_hook(
+            RingLink::new(vcp_consumer, vcp_tx),
+            server_steps,
+            HostSession,
+        );
         let shared = Shared {
             report: Report::default(),
         };
@@ -173,6 +222,7 @@ mod app {
     /// the core refuse stops the board here, with the reason in the log.
     fn juggler(
         params: ControllerParams,
+        sysclk_hz: u32,
         encoder: Tim3Encoder,
         camera: RingReader,
         pwm: rig::MotorPwm,
@@ -194,18 +244,17 @@ mod app {
             Ok(c) => c,
             Err(e) => defmt::panic!("controller parameters refused: {}", e),
         };
-        let Some(periodic) = Periodic::new(controller, SYSCLK_HZ / CONTROL_RATE_HZ) else {
+        let Some(periodic) = Periodic::new(controller, sysclk_hz / CONTROL_RATE_HZ) else {
             defmt::panic!("zero control period")
         };
         (rig, periodic)
     }
 
-    /// The host link's receive interrupt: bytes into the ring; the first one starts a
-    /// host session.
+    /// The host link's receive interrupt: bytes into the ring (the lock-step server in
+    /// `idle` decodes them; only an accepted `Configure` starts a host session).
     #[task(binds = USART2, priority = 3, local = [vcp_rx, vcp_ring])]
     fn vcp_receive(cx: vcp_receive::Context) {
         uart_ring::on_receive(cx.local.vcp_rx, cx.local.vcp_ring, &VCP_ERRORS);
-        HOST_SESSION.store(true, Ordering::Relaxed);
     }
 
     /// The camera's receive interrupt: bytes into the ring.
