@@ -7,6 +7,7 @@
 //! firmware/README.md, "Emulation"); the same image on the internal oscillator (feature
 //! `qemu-hsi`) runs in the loop under emulation in `host-sim/tests/board_hil.rs`.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -254,11 +255,121 @@ fn assert_the_board_runs_the_scenes_controller(elf: &[u8]) {
     );
 }
 
+/// The image's functions by address, each with the addresses its direct calls and tail
+/// branches (`bl`, `b.w`, `b` to another function) go to, in program order, and the
+/// label `llvm-objdump -d` gives each (one of its names, where several alias it).
+struct CallGraph {
+    calls: HashMap<u64, Vec<u64>>,
+    labels: HashMap<String, u64>,
+}
+
+fn hex(t: &str) -> Option<u64> {
+    u64::from_str_radix(t.trim().trim_start_matches("0x"), 16).ok()
+}
+
+fn call_graph(elf: &Path) -> CallGraph {
+    let objdump = dexter_sim::hil::llvm_tool("llvm-objdump").unwrap_or_else(|e| panic!("{e}"));
+    let out = Command::new(objdump)
+        .args(["-d", "--no-show-raw-insn", "--triple=thumbv7em-none-eabihf"])
+        .arg(elf)
+        .output()
+        .expect("llvm-objdump runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut g = CallGraph {
+        calls: HashMap::new(),
+        labels: HashMap::new(),
+    };
+    let mut current = 0;
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let label = line.strip_suffix(">:").and_then(|l| l.split_once(" <"));
+        if let Some((addr, name)) = label.and_then(|(a, n)| Some((hex(a)?, n))) {
+            current = addr;
+            g.labels.insert(name.to_string(), addr);
+            g.calls.entry(addr).or_default();
+            continue;
+        }
+        let mut fields = line.split('\t').map(str::trim);
+        let op = fields.nth(1).unwrap_or("");
+        let operand = fields.next().unwrap_or("");
+        let to_function = operand.contains('<') && !operand.contains('+');
+        if matches!(op, "bl" | "b.w" | "b") && to_function {
+            if let Some(t) = operand.split_whitespace().next().and_then(hex) {
+                g.calls.entry(current).or_default().push(t);
+            }
+        }
+    }
+    g
+}
+
+/// Whether the function at `entry`'s first call is `goal`, or goes to a function whose
+/// first call is (a few levels down: cortex-m-rt's trampolines, the handlers they call).
+fn first_call_reaches(g: &CallGraph, entry: u64, goal: u64) -> bool {
+    let mut f = entry;
+    for _ in 0..4 {
+        match g.calls.get(&f).and_then(|calls| calls.first()) {
+            Some(&t) if t == goal => return true,
+            Some(&t) => f = t,
+            None => return false,
+        }
+    }
+    false
+}
+
+/// The fault paths, read from the linked image where the emulator cannot show them (it
+/// does not model TIM1, the GPIOs or the IWDG; `host-sim/tests/board_hil.rs` shows the
+/// paths it can run end in the motor cut): the HardFault (where a stack overflow and a
+/// panic's `udf` end), the unhandled-interrupt handler, the NMI and both panic handlers
+/// call `dexter_motor_off` before anything else; the watchdog is fed from the control
+/// task (TIM2's handler) and nowhere else, so a hung control task is reset.
+fn assert_every_fault_path_cuts_the_motor_first(elf: &Path) {
+    let g = call_graph(elf);
+    let bytes = std::fs::read(elf).unwrap();
+    let addr = |name: &str| {
+        symbol(&bytes, name)
+            .map(|a| a & !1) // the Thumb bit
+            .or_else(|| g.labels.get(name).copied())
+            .unwrap_or_else(|| panic!("no {name} in the image"))
+    };
+    let motor_off = addr("dexter_motor_off");
+    let panic_handler = g
+        .labels
+        .keys()
+        .find(|k| k.contains("rust_begin_unwind"))
+        .expect("a panic handler")
+        .clone();
+    for entry in [
+        "HardFault",
+        "DefaultHandler",
+        "NonMaskableInt",
+        "_defmt_panic",
+        &panic_handler,
+    ] {
+        assert!(
+            first_call_reaches(&g, addr(entry), motor_off),
+            "{entry} does not cut the motor first: it calls {:x?}",
+            g.calls.get(&addr(entry))
+        );
+    }
+    let feed = addr("dexter_feed_watchdog");
+    let feeders: Vec<u64> = g
+        .calls
+        .iter()
+        .filter(|(_, calls)| calls.contains(&feed))
+        .map(|(&f, _)| f)
+        .collect();
+    assert_eq!(feeders, [addr("TIM2")], "the watchdog's feeders");
+}
+
 /// One test, so the image is built once: golden sizes, budgets, documents, the scene.
 #[test]
 fn the_board_image_builds_fits_its_budgets_and_matches_the_expected_sizes() {
     let elf = board_elf();
     assert_the_board_runs_the_scenes_controller(&std::fs::read(&elf).unwrap());
+    assert_every_fault_path_cuts_the_motor_first(&elf);
     let s = sizes(&elf);
     let actual = sizes_text(&s);
     let expected_path = board_dir().join("expected/sizes.txt");

@@ -26,7 +26,9 @@ use dexter_core::fixed_rate::Fault;
 use dexter_sim::controller::StepController;
 use dexter_sim::hil::{HilOptions, LockStep, SerialPortOptions};
 use serde_json::Value;
-use std::io::{BufRead, BufReader};
+use serialport::SerialPort;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
@@ -69,25 +71,38 @@ fn emulated_board_image() -> PathBuf {
     copy
 }
 
-/// The emulated board: QEMU's pid is killed and waited for on drop.
+/// The address of the static `name` in `elf` (`llvm-objdump -t`).
+fn symbol_address(elf: &Path, name: &str) -> u64 {
+    let objdump = dexter_sim::hil::llvm_tool("llvm-objdump").unwrap_or_else(|e| panic!("{e}"));
+    let out = Command::new(objdump).arg("-t").arg(elf).output().unwrap();
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .find(|l| l.split_whitespace().last() == Some(name))
+        .and_then(|l| u64::from_str_radix(l.split_whitespace().next()?, 16).ok())
+        .unwrap_or_else(|| panic!("no symbol {name} in {}", elf.display()))
+}
+
+/// The emulated board: USART2 (the host link) on a pseudo-terminal, USART1 (the camera's
+/// line) and QEMU's monitor on Unix sockets in a private directory. QEMU's pid is killed
+/// and waited for on drop, and the directory removed.
 struct Emulator {
     qemu: Child,
     port: String,
+    dir: PathBuf,
+    camera: UnixStream,
 }
 
 impl Emulator {
-    /// Boot `elf` in netduinoplus2 with USART1 on nothing and USART2 on a pseudo-terminal;
-    /// the port is the one QEMU names on stdout ("char device redirected to /dev/pts/N").
-    fn boot(elf: &Path) -> Self {
+    /// Boot `elf` in netduinoplus2; the port is the one QEMU names on stdout ("char device
+    /// redirected to /dev/pts/N").
+    fn boot(elf: &Path, name: &str) -> Self {
+        let dir = common::scratch(name);
+        let (monitor, camera) = (dir.join("monitor.sock"), dir.join("camera.sock"));
+        let unix = |p: &Path| format!("unix:{},server=on,wait=off", p.display());
         let mut qemu = Command::new("qemu-system-arm")
-            .args([
-                "-machine",
-                "netduinoplus2",
-                "-nographic",
-                "-monitor",
-                "none",
-            ])
-            .args(["-serial", "null", "-serial", "pty", "-kernel"])
+            .args(["-machine", "netduinoplus2", "-nographic"])
+            .args(["-monitor", &unix(&monitor), "-serial", &unix(&camera)])
+            .args(["-serial", "pty", "-kernel"])
             .arg(elf)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
@@ -102,19 +117,72 @@ impl Emulator {
                 let _ = tx.send(line);
             }
         });
-        let mut emulator = Emulator {
-            qemu,
-            port: String::new(),
-        };
         let mut seen = Vec::new();
-        while let Ok(line) = rx.recv_timeout(BOOT_TIMEOUT) {
+        let port = loop {
+            let Ok(line) = rx.recv_timeout(BOOT_TIMEOUT) else {
+                let _ = qemu.kill();
+                let _ = qemu.wait();
+                panic!("QEMU named no pseudo-terminal within {BOOT_TIMEOUT:?}; it said: {seen:?}");
+            };
             if let Some(at) = line.find("/dev/pts/") {
-                emulator.port = line[at..].split_whitespace().next().unwrap().to_string();
-                return emulator;
+                break line[at..].split_whitespace().next().unwrap().to_string();
             }
             seen.push(line);
+        };
+        let camera = UnixStream::connect(&camera).expect("QEMU's USART1 socket");
+        Emulator {
+            qemu,
+            port,
+            dir,
+            camera,
         }
-        panic!("QEMU named no pseudo-terminal within {BOOT_TIMEOUT:?}; it said: {seen:?}");
+    }
+
+    /// One monitor command's answer (QEMU's human monitor, echo included).
+    fn monitor(&self, command: &str) -> String {
+        let gone = "QEMU's monitor is gone: QEMU ended (a core lockup, a fault that cannot \
+                    be handled, ends it)";
+        let mut m = UnixStream::connect(self.dir.join("monitor.sock")).expect(gone);
+        m.set_read_timeout(Some(Duration::from_millis(500)))
+            .unwrap();
+        let mut answer = Vec::new();
+        let mut buf = [0u8; 4096];
+        let mut read_to_prompt = |m: &mut UnixStream, answer: &mut Vec<u8>| {
+            while let Ok(n) = m.read(&mut buf) {
+                answer.extend_from_slice(&buf[..n]);
+                if n == 0 || answer.ends_with(b"(qemu) ") {
+                    break;
+                }
+            }
+        };
+        read_to_prompt(&mut m, &mut answer);
+        answer.clear();
+        m.write_all(format!("{command}\n").as_bytes()).expect(gone);
+        read_to_prompt(&mut m, &mut answer);
+        String::from_utf8_lossy(&answer).into_owned()
+    }
+
+    /// The 32-bit word at physical address `addr` (`xp`).
+    fn word(&self, addr: u64) -> u32 {
+        let answer = self.monitor(&format!("xp /1wx {addr:#x}"));
+        let key = format!("{addr:016x}: 0x");
+        let at = answer
+            .find(&key)
+            .unwrap_or_else(|| panic!("xp: {answer:?}"))
+            + key.len();
+        u32::from_str_radix(&answer[at..at + 8], 16).unwrap()
+    }
+
+    /// Poll the word at `addr` until it is `want` (true) or `wait` has passed (false).
+    fn word_becomes(&self, addr: u64, want: u32, wait: Duration) -> bool {
+        let end = std::time::Instant::now() + wait;
+        while std::time::Instant::now() < end {
+            if self.word(addr) == want {
+                return true;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        false
     }
 }
 
@@ -122,6 +190,7 @@ impl Drop for Emulator {
     fn drop(&mut self) {
         let _ = self.qemu.kill();
         let _ = self.qemu.wait();
+        let _ = std::fs::remove_dir_all(&self.dir);
     }
 }
 
@@ -176,7 +245,9 @@ fn hil_figures(v: &Value) -> &Value {
 /// The four kinds with a scene, through the CLI, then the link check through the library.
 #[test]
 fn every_hosted_kind_runs_on_the_emulated_board_bit_for_bit_against_sil() {
-    let board = Emulator::boot(&emulated_board_image());
+    let elf = emulated_board_image();
+    let session = symbol_address(&elf, "DEXTER_HOST_SESSION");
+    let board = Emulator::boot(&elf, "board-hil");
     // (scene, events: short runs (an arm scene is one motion), where the summary counts
     // the control steps, the fewest it must count)
     let runs = [
@@ -204,12 +275,53 @@ fn every_hosted_kind_runs_on_the_emulated_board_bit_for_bit_against_sil() {
         assert_eq!(figures["step_instructions_max"], 0, "{name}: {figures}");
         assert_same_outcome(name, &sil, &hil);
     }
+    // Noise on the host link, and a Configure frame with one bit flipped, do not start a
+    // host session: only a decoded, accepted Configure does. Written raw, as the HIL link
+    // opens the port (a terminal's line discipline would rewrite bytes), after the runs
+    // above, which must see a clean link (the firmware counts the noise's link errors).
+    let mut configure =
+        std::fs::read(workspace().join("boards/nucleo-f446re/scene.configure")).unwrap();
+    configure[5] ^= 0x10;
+    let mut vcp = serialport::new(board.port.as_str(), 921_600)
+        .open_native()
+        .expect("the board's pseudo-terminal");
+    vcp.write_all(&[0x55, 0xAA, 0x00, 0x13, 0x37, 0x00])
+        .unwrap();
+    vcp.write_all(&configure).unwrap();
+    vcp.flush().unwrap();
+    // read the board's answers (refusals) until the line is quiet, so none is left for the
+    // next session to take for its own (QEMU notices a reopened pty within a second)
+    vcp.set_timeout(Duration::from_millis(300)).unwrap();
+    let mut answers = Vec::new();
+    let mut buf = [0u8; 256];
+    let give_up = std::time::Instant::now() + Duration::from_secs(3);
+    loop {
+        match vcp.read(&mut buf) {
+            Ok(n) => answers.extend_from_slice(&buf[..n]),
+            Err(_) if answers.is_empty() && std::time::Instant::now() < give_up => {}
+            Err(_) => break,
+        }
+    }
+    assert!(!answers.is_empty(), "the board answers frames it refuses");
+    drop(vcp);
+    let no_session = board.word(session) & 0xff;
+    assert_eq!(no_session, 0, "a host session without a valid Configure");
     let opts = HilOptions {
         serial: Some(SerialPortOptions::new(&board.port)),
         ..HilOptions::default()
     };
     let gain = -2.5f32;
     let mut hil = LockStep::<Echo>::start(EchoParams { gain }, opts).expect("Echo on the board");
+    let session_started = board.word(session) & 0xff;
+    assert_eq!(
+        session_started, 1,
+        "the accepted Configure starts the session"
+    );
+    assert_eq!(
+        board.word(session) & 0xff,
+        1,
+        "the accepted Configure starts the session"
+    );
     for seq in 0..200u32 {
         let value = seq as f32 * 0.25 - 7.0;
         let out = hil.step(&EchoFrame { seq, value }).expect("step").command;
@@ -218,6 +330,43 @@ fn every_hosted_kind_runs_on_the_emulated_board_bit_for_bit_against_sil() {
     }
     let report = hil.finish().expect("a clean Stop");
     assert_eq!(report.sil_mismatches, 0, "{report:?}");
+}
+
+/// Each fault path the emulator can run ends with the motor cut, `fault::DEXTER_MOTOR_OFF`
+/// holding its cause: a byte `0xF1..=0xF5` on USART1 provokes one (`fault_hooks.rs`,
+/// `qemu-hsi` only), and the monitor resets the board between them. The stack overflow
+/// ends in a HardFault only because the MPU guard leaves it room to stack its frame:
+/// without the guard the core locks up and the word stays 0. (The motor cut itself writes
+/// TIM1 and GPIOA, which QEMU does not model: `tests/board.rs` checks on the linked image
+/// that each handler calls it first, and that only the control task feeds the watchdog.)
+#[test]
+fn each_fault_path_on_the_emulated_board_ends_with_the_motor_off() {
+    let elf = emulated_board_image();
+    let motor_off = symbol_address(&elf, "DEXTER_MOTOR_OFF");
+    let mut board = Emulator::boot(&elf, "board-faults");
+    // (hook byte, Cause as u32 in boards/nucleo-f446re/src/fault.rs, what)
+    let faults = [
+        (0xF1, 1, "HardFault from a bus error"),
+        (0xF2, 2, "panic"),
+        (0xF3, 1, "stack overflow"),
+        (0xF4, 3, "NMI"),
+        (0xF5, 4, "unhandled interrupt"),
+    ];
+    for (byte, cause, what) in faults {
+        board.monitor("system_reset");
+        // the reset handler zeroes .bss: the word is 0 once the image runs again
+        assert!(
+            board.word_becomes(motor_off, 0, BOOT_TIMEOUT),
+            "{what}: the board did not boot again"
+        );
+        std::thread::sleep(Duration::from_millis(200)); // init enables USART1's interrupt
+        board.camera.write_all(&[byte]).unwrap();
+        assert!(
+            board.word_becomes(motor_off, cause, Duration::from_secs(5)),
+            "{what}: DEXTER_MOTOR_OFF is {}, not {cause}",
+            board.word(motor_off)
+        );
+    }
 }
 
 /// `dexter board`: the camera the board's stand-alone loop needs for a scene. The line

@@ -24,9 +24,11 @@
 #![deny(unsafe_op_in_unsafe_fn)]
 
 use defmt_rtt as _; // global logger: defmt over RTT, read by probe-rs
-use panic_probe as _; // panics print through defmt, then `udf` (a HardFault the probe sees)
+                    // The panic handlers are `fault`'s: motor off first.
 
 mod fault;
+#[cfg(feature = "qemu-hsi")]
+mod fault_hooks;
 mod report;
 mod rig;
 mod tick;
@@ -47,10 +49,15 @@ pub const SYSCLK_HZ: u32 = 180_000_000;
 pub const SYSCLK_HZ: u32 = 16_000_000;
 /// The host link's rate, Bd (the ST-LINK/V2-1 VCP carries up to 2 MBd).
 pub const VCP_BAUD: u32 = 921_600;
+/// The independent watchdog's timeout, ms: 10 control periods (the LSI that clocks it is
+/// 17 to 47 kHz on the F4, so the real timeout is 7 to 19 ms). Fed by the control task only.
+pub const WATCHDOG_MS: u32 = 20;
 
 /// Set when the lock-step server accepts a host's `Configure` ([`HostSession`]): a host
-/// drives the board from now.
-static HOST_SESSION: AtomicBool = AtomicBool::new(false);
+/// drives the board from now. (Unmangled for a debugger and the emulator test.)
+#[no_mangle]
+static DEXTER_HOST_SESSION: AtomicBool = AtomicBool::new(false);
+use DEXTER_HOST_SESSION as HOST_SESSION;
 
 /// The scene's `Configure` frame the stand-alone loop runs (`build.rs`:
 /// `DEXTER_BOARD_CONFIGURE`, from `dexter board SCENE --write FILE`), the bytes a host would
@@ -61,6 +68,16 @@ pub static DEXTER_SCENE_CONFIGURE: [u8; SCENE_CONFIGURE_LEN] =
     *include_bytes!(concat!(env!("OUT_DIR"), "/scene.configure"));
 const SCENE_CONFIGURE_LEN: usize =
     include_bytes!(concat!(env!("OUT_DIR"), "/scene.configure")).len();
+
+/// Feed the independent watchdog: called by the control task only (the image check in
+/// `tests/board.rs` finds no other caller), so a hung control task resets the part.
+#[inline(never)]
+#[no_mangle]
+pub extern "Rust" fn dexter_feed_watchdog(
+    watchdog: &mut stm32f4xx_hal::watchdog::IndependentWatchdog,
+) {
+    watchdog.feed();
+}
 
 /// Ends the stand-alone loop when a host's `Configure` is accepted.
 pub struct HostSession;
@@ -98,7 +115,7 @@ mod app {
     use crate::rig::{self, BoardRig, Tim3Encoder, CAMERA_BAUD, PWM_HZ};
     use crate::tick::TickClock;
     use crate::uart_ring::{self, ErrorCount, RingLink, RingReader, RX_RING_LEN};
-    use crate::{HostSession, CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD};
+    use crate::{HostSession, CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD, WATCHDOG_MS};
     use core::sync::atomic::Ordering;
     use dexter_core::control::{Controller, ControllerParams};
     use dexter_drivers::periodic::{Deadline, Periodic};
@@ -111,6 +128,7 @@ mod app {
     use stm32f4xx_hal::rcc::Config as Clocks;
     use stm32f4xx_hal::serial::{Config as SerialConfig, Rx, Serial};
     use stm32f4xx_hal::timer::{CounterHz, Event, Flag};
+    use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
     static VCP_RING: ByteRing<RX_RING_LEN> = ByteRing::new();
     static CAMERA_RING: ByteRing<RX_RING_LEN> = ByteRing::new();
@@ -120,6 +138,9 @@ mod app {
     #[shared]
     struct Shared {
         report: Report,
+        /// Nothing: locked by `control` around the core's step, its ceiling (the receive
+        /// interrupts', 3) keeps them out of the measured window without masking faults.
+        step_window: (),
     }
 
     #[local]
@@ -133,6 +154,9 @@ mod app {
         camera_rx: Rx<USART1, u8>,
         camera_ring: Producer<'static, RX_RING_LEN>,
         server: Server<RingLink<USART2>, DwtCycles, HostSession>,
+        watchdog: IndependentWatchdog,
+        /// Reset by the watchdog: the motor stays parked until a power cycle or a reset.
+        parked: bool,
     }
 
     #[init]
@@ -145,6 +169,25 @@ mod app {
             .sysclk(SYSCLK_HZ.Hz());
         #[cfg(feature = "qemu-hsi")]
         let clocks = Clocks::hsi().sysclk(SYSCLK_HZ.Hz());
+        let watchdog_reset = dp.RCC.csr().read().wdgrstf().bit_is_set();
+        dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
+        // Debugging: TIM1 (the motor PWM), TIM2 (the tick) and the watchdog stop while the
+        // core is halted; the debug port stays up in `wfi` (sleep), stop and standby.
+        dp.DBGMCU.cr().modify(|_, w| {
+            w.dbg_sleep()
+                .set_bit()
+                .dbg_stop()
+                .set_bit()
+                .dbg_standby()
+                .set_bit()
+        });
+        dp.DBGMCU
+            .apb1_fz()
+            .modify(|_, w| w.dbg_tim2_stop().set_bit().dbg_iwdg_stop().set_bit());
+        dp.DBGMCU
+            .apb2_fz()
+            .modify(|_, w| w.dbg_tim1_stop().set_bit());
+        crate::fault::guard_stack(&mut core.MPU);
         let mut rcc = dp.RCC.freeze(clocks);
         let steps = DwtCycles::new(&mut core.DCB, &mut core.DWT);
         let server_steps = DwtCycles::new(&mut core.DCB, &mut core.DWT);
@@ -169,6 +212,8 @@ mod app {
         };
         camera_rx.listen();
 
+        // Safety: TIM1's registers, before the PWM channel takes it: OSSI and OIS1 only.
+        crate::fault::idle_level_when_off(unsafe { &*stm32f4xx_hal::pac::TIM1::ptr() });
         let (_, (pwm, ..)) = dp.TIM1.pwm_hz(PWM_HZ.Hz(), &mut rcc);
         let mut pwm = pwm.with(gpioa.pa8);
         pwm.enable();
@@ -196,6 +241,11 @@ mod app {
             CONTROL_RATE_HZ,
             VCP_BAUD
         );
+        if watchdog_reset {
+            defmt::error!("reset by the watchdog: the motor stays parked (HIL still runs)");
+        }
+        let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+        watchdog.start(WATCHDOG_MS.millis());
         let server = Server::with_hook(
             RingLink::new(vcp_consumer, vcp_tx),
             server_steps,
@@ -203,6 +253,7 @@ mod app {
         );
         let shared = Shared {
             report: Report::default(),
+            step_window: (),
         };
         let local = Local {
             periodic,
@@ -214,6 +265,8 @@ mod app {
             camera_rx,
             camera_ring,
             server,
+            watchdog,
+            parked: watchdog_reset,
         };
         (shared, local)
     }
@@ -252,33 +305,40 @@ mod app {
 
     /// The host link's receive interrupt: bytes into the ring (the lock-step server in
     /// `idle` decodes them; only an accepted `Configure` starts a host session).
-    #[task(binds = USART2, priority = 3, local = [vcp_rx, vcp_ring])]
+    #[task(binds = USART2, priority = 3, local = [vcp_rx, vcp_ring], shared = [step_window])]
     fn vcp_receive(cx: vcp_receive::Context) {
-        uart_ring::on_receive(cx.local.vcp_rx, cx.local.vcp_ring, &VCP_ERRORS);
+        let _ = uart_ring::on_receive(cx.local.vcp_rx, cx.local.vcp_ring, &VCP_ERRORS);
     }
 
     /// The camera's receive interrupt: bytes into the ring.
-    #[task(binds = USART1, priority = 3, local = [camera_rx, camera_ring])]
+    #[task(binds = USART1, priority = 3, local = [camera_rx, camera_ring], shared = [step_window])]
     fn camera_receive(cx: camera_receive::Context) {
-        uart_ring::on_receive(cx.local.camera_rx, cx.local.camera_ring, &CAMERA_ERRORS);
+        let _last = uart_ring::on_receive(cx.local.camera_rx, cx.local.camera_ring, &CAMERA_ERRORS);
+        #[cfg(feature = "qemu-hsi")]
+        crate::fault_hooks::on_camera_byte(_last);
     }
 
     /// One control period on TIM2's tick (see the crate docs).
-    #[task(binds = TIM2, priority = 2, local = [periodic, rig, tick, steps], shared = [report])]
+    /// In a host session (or after a watchdog reset) the task only keeps the motor parked
+    /// and feeds the watchdog: the motor is never driven again until reset.
+    #[task(binds = TIM2, priority = 2, local = [periodic, rig, tick, steps, watchdog, parked], shared = [report, step_window])]
     fn control(mut cx: control::Context) {
         let local = cx.local;
-        if HOST_SESSION.load(Ordering::Relaxed) {
+        crate::dexter_feed_watchdog(local.watchdog);
+        if *local.parked || HOST_SESSION.load(Ordering::Relaxed) {
             local.tick.clear_flags(Flag::Update);
-            local.tick.unlisten(Event::Update);
             if local.rig.park().is_err() {
                 defmt::error!("the motor could not be parked");
             }
-            defmt::info!(
-                "a host is on the VCP: juggling loop stopped, motor parked, lock-step HIL"
-            );
+            if !*local.parked {
+                defmt::info!(
+                    "a host configured the board: juggling loop stopped, motor parked, lock-step HIL"
+                );
+                *local.parked = true;
+            }
             return;
         }
-        let mut clock = TickClock::take(local.steps, local.tick);
+        let mut clock = TickClock::take(local.steps, local.tick, &mut cx.shared.step_window);
         let out = local.periodic.period(local.rig, &mut clock);
         let stats = local.periodic.stats();
         if let Deadline::Overrun { ticks_lost } = out.deadline {

@@ -34,21 +34,26 @@ impl ErrorCount {
 }
 
 /// The receive interrupt's body: move what the USART holds into the ring; count errors
-/// (reading the data register after the status clears them).
+/// (reading the data register after the status clears them). Returns the last byte moved.
 pub fn on_receive<U: Instance>(
     rx: &mut Rx<U, u8>,
     ring: &mut Producer<'static, RX_RING_LEN>,
     errors: &ErrorCount,
-) {
+) -> Option<u8> {
+    let mut last = None;
     for _ in 0..MAX_BYTES_PER_INTERRUPT {
         match rx.read() {
-            Ok(byte) => ring.push(byte),
+            Ok(byte) => {
+                ring.push(byte);
+                last = Some(byte);
+            }
             Err(nb::Error::WouldBlock) => break,
             Err(nb::Error::Other(_)) => {
                 errors.0.fetch_add(1, Ordering::Relaxed);
             }
         }
     }
+    last
 }
 
 /// The protocol server's link: the ring's consumer, and the USART's transmitter.
