@@ -395,3 +395,20 @@ fn the_board_image_builds_fits_its_budgets_and_matches_the_expected_sizes() {
     check_block(&root().join("firmware/README.md"), &table);
     check_block(&root().join("BENCHMARKS.md"), &table);
 }
+
+/// The camera-side sketch (`boards/nucleo-f446re/camera/frames.py`) encodes the frame the
+/// board's parser reads: its self-test checks the drivers' test vector byte for byte.
+#[test]
+fn the_camera_sketch_encodes_the_drivers_frame() {
+    let out = Command::new("python3")
+        .arg(board_dir().join("camera/frames.py"))
+        .arg("--selftest")
+        .output()
+        .expect("python3 runs");
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

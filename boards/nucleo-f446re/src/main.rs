@@ -59,6 +59,13 @@ pub const WATCHDOG_MS: u32 = 20;
 static DEXTER_HOST_SESSION: AtomicBool = AtomicBool::new(false);
 use DEXTER_HOST_SESSION as HOST_SESSION;
 
+/// Marks the `qemu-hsi` image, so that the workspace's runner (`scripts/run-target.sh`)
+/// boots it in QEMU's netduinoplus2 instead of flashing it.
+#[cfg(feature = "qemu-hsi")]
+#[no_mangle]
+#[used]
+pub static DEXTER_QEMU_HSI_IMAGE: u8 = 1;
+
 /// The scene's `Configure` frame the stand-alone loop runs (`build.rs`:
 /// `DEXTER_BOARD_CONFIGURE`, from `dexter board SCENE --write FILE`), the bytes a host would
 /// send. Kept under this symbol so that `tests/board.rs` can compare it with the host's.
