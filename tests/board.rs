@@ -89,7 +89,7 @@ fn bytes_at(b: &[u8], addr: u64, len: usize) -> Option<&[u8]> {
     (0..count).find_map(|i| {
         let h = shoff + i * entsize;
         let (ty, start) = (u32_at(b, h + 4), u32_at(b, h + 12));
-        let (off, size) = (u32_at(b, h + 16) as usize, u32_at(b, h + 20) as u64);
+        let (off, size) = (u32_at(b, h + 16) as usize, u32_at(b, h + 20));
         const NOBITS: u64 = 8;
         let inside =
             ty != NOBITS && start != 0 && addr >= start && addr + len as u64 <= start + size;
