@@ -32,7 +32,6 @@ mod fault_hooks;
 mod report;
 mod rig;
 mod tick;
-mod uart_ring;
 
 use core::sync::atomic::AtomicBool;
 
@@ -121,7 +120,6 @@ mod app {
     use crate::report::Report;
     use crate::rig::{self, BoardRig, Tim3Encoder, CAMERA_BAUD, PWM_HZ};
     use crate::tick::TickClock;
-    use crate::uart_ring::{self, ErrorCount, RingLink, RingReader, RX_RING_LEN};
     use crate::{HostSession, CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD, WATCHDOG_MS};
     use core::sync::atomic::Ordering;
     use dexter_core::control::{Controller, ControllerParams};
@@ -130,10 +128,11 @@ mod app {
     use dexter_firmware::board::DwtCycles;
     use dexter_firmware::ring::{ByteRing, Producer};
     use dexter_firmware::server::Server;
+    use dexter_firmware::uart::{self as uart_ring, ErrorCount, RingLink, RingReader, RX_RING_LEN};
     use stm32f4xx_hal::pac::{TIM2, USART1, USART2};
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::Config as Clocks;
-    use stm32f4xx_hal::serial::{Config as SerialConfig, Rx, Serial};
+    use stm32f4xx_hal::serial::{Config as SerialConfig, Rx, Serial, Tx};
     use stm32f4xx_hal::timer::{CounterHz, Event, Flag};
     use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
@@ -160,7 +159,7 @@ mod app {
         vcp_ring: Producer<'static, RX_RING_LEN>,
         camera_rx: Rx<USART1, u8>,
         camera_ring: Producer<'static, RX_RING_LEN>,
-        server: Server<RingLink<USART2>, DwtCycles, HostSession>,
+        server: Server<RingLink<Tx<USART2, u8>>, DwtCycles, HostSession>,
         watchdog: IndependentWatchdog,
         /// Reset by the watchdog: the motor stays parked until a power cycle or a reset.
         parked: bool,

@@ -21,7 +21,7 @@ use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::qei::Qei;
 use stm32f4xx_hal::timer::PwmChannel;
 
-use crate::uart_ring::RingReader;
+use dexter_firmware::uart::RingReader;
 
 /// PWM frequency of the motor driver, Hz (above hearing, within an MD10C's 20 kHz).
 pub const PWM_HZ: u32 = 20_000;
