@@ -368,7 +368,13 @@ fn assert_every_fault_path_cuts_the_motor_first(elf: &Path) {
 #[test]
 fn the_board_image_builds_fits_its_budgets_and_matches_the_expected_sizes() {
     let elf = board_elf();
-    assert_the_board_runs_the_scenes_controller(&std::fs::read(&elf).unwrap());
+    let bytes = std::fs::read(&elf).unwrap();
+    let marker = b"DEXTER_QEMU_HSI_IMAGE";
+    assert!(
+        !bytes.windows(marker.len()).any(|w| w == marker),
+        "the real image carries the emulator's marker (scripts/run-target.sh would not flash it)"
+    );
+    assert_the_board_runs_the_scenes_controller(&bytes);
     assert_every_fault_path_cuts_the_motor_first(&elf);
     let s = sizes(&elf);
     let actual = sizes_text(&s);
@@ -411,4 +417,68 @@ fn the_camera_sketch_encodes_the_drivers_frame() {
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// The workspace's runner (`scripts/run-target.sh`, `.cargo/config.toml`) picks the machine
+/// by image, so that `cargo run -p dexter-nucleo-f446re` from the root flashes the board
+/// instead of booting the F446 image in the QEMU image's mps2-an386: run on stand-in
+/// images with `probe-rs` and `qemu-system-arm` replaced by stubs that record their
+/// arguments.
+#[test]
+fn the_runner_flashes_the_board_image_and_emulates_the_others() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = std::env::temp_dir().join(format!("dexter-runner-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for tool in ["probe-rs", "qemu-system-arm"] {
+        let stub = dir.join(tool);
+        let script = format!(
+            "#!/bin/sh\necho \"{tool} $*\" > \"{}/called\"\n",
+            dir.display()
+        );
+        std::fs::write(&stub, script).unwrap();
+        std::fs::set_permissions(&stub, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    let image = |name: &str, text: &[u8]| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let cases = [
+        (
+            image("dexter-nucleo-f446re", b"\x7fELF board"),
+            "probe-rs run --chip STM32F446RETx",
+        ),
+        (
+            image(
+                "dexter-nucleo-f446re-qemu-hsi.elf",
+                b"\x7fELF DEXTER_QEMU_HSI_IMAGE",
+            ),
+            "qemu-system-arm -machine netduinoplus2",
+        ),
+        (
+            image("dexter-firmware", b"\x7fELF qemu"),
+            "qemu-system-arm -machine mps2-an386",
+        ),
+    ];
+    for (elf, want) in cases {
+        let out = Command::new(root().join("scripts/run-target.sh"))
+            .arg(&elf)
+            .env("PATH", format!("{}:/usr/bin:/bin", dir.display()))
+            .stdout(std::process::Stdio::null())
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let called = std::fs::read_to_string(dir.join("called")).unwrap();
+        assert!(
+            called.starts_with(want) && called.contains(elf.to_str().unwrap()),
+            "{}: ran {called}",
+            elf.display()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
