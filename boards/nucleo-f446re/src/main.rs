@@ -7,18 +7,22 @@
 //!   the simulator and the QEMU image run), the motor; the period's deadline is checked and
 //!   an overrun answered with the core's safe command (`dexter_drivers::periodic`). Once a
 //!   second the period task hands a snapshot to `telemetry` (software task, priority 1),
-//!   which logs it with defmt over RTT.
-//! - **juggling** runs the controller of the scene chosen at build time
+//!   which logs it with defmt over RTT. The controller is the scene's chosen at build time
 //!   ([`DEXTER_SCENE_CONFIGURE`], `dexter board SCENE --write FILE`), not a default tuning.
 //! - **hardware in the loop**: the first valid `Configure` frame a host sends on the VCP
 //!   (decoded and accepted by the lock-step server; noise or a UART error does not) ends
-//!   the juggling loop for good (the motor is parked, duty 0, and TIM2 stops): `idle` runs the
+//!   the juggling loop for good (the motor is parked, duty 0; TIM2 keeps ticking only to
+//!   keep it parked and feed the watchdog): `idle` runs the
 //!   board-neutral lock-step server (`dexter_firmware::server::Server`) on the VCP, exactly
 //!   as the QEMU image does, and the host's simulated plant closes the loop
 //!   (`dexter run SCENE --hil --port /dev/ttyACM0`). After the host's `Stop` the board
 //!   resets, back to juggling.
 //!
-//! The receive interrupts of both UARTs (priority 3) only move bytes into rings.
+//! The receive interrupts of both UARTs (priority 3) only move bytes into rings
+//! (`dexter_firmware::uart`). The control task alone feeds the independent watchdog, and
+//! every fault path cuts the motor first (`fault`); with the `qemu-hsi` feature the same
+//! image runs on the internal oscillator in QEMU's netduinoplus2 (firmware/README.md,
+//! "Emulation").
 #![no_std]
 #![no_main]
 #![deny(unsafe_op_in_unsafe_fn)]
