@@ -5,7 +5,7 @@
 //!   [`CONTROL_RATE_HZ`] (hardware task `control`, priority 2): the rig's sensors (encoder,
 //!   camera), the core's line-juggler `step` (the same `dexter_core::control::Controller`
 //!   the simulator and the QEMU image run), the motor; the period's deadline is checked and
-//!   an overrun answered with the core's safe command (`dexter_drivers::periodic`). Once a
+//!   an overrun answered with the core's safe command (`dexter_rig::periodic`). Once a
 //!   second the period task hands a snapshot to `telemetry` (software task, priority 1),
 //!   which logs it with defmt over RTT. The controller is the scene's chosen at build time
 //!   ([`DEXTER_SCENE_CONFIGURE`], `dexter board SCENE --write FILE`), not a default tuning.
@@ -127,12 +127,12 @@ mod app {
     use crate::{HostSession, CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD, WATCHDOG_MS};
     use core::sync::atomic::Ordering;
     use dexter_core::control::{Controller, ControllerParams};
-    use dexter_drivers::periodic::{Deadline, Periodic};
-    use dexter_drivers::rig::Rig;
     use dexter_firmware::board::DwtCycles;
     use dexter_firmware::ring::{ByteRing, Producer};
     use dexter_firmware::server::Server;
     use dexter_firmware::uart::{self as uart_ring, ErrorCount, RingLink, RingReader, RX_RING_LEN};
+    use dexter_rig::periodic::{Deadline, Periodic};
+    use dexter_rig::rig::Rig;
     use stm32f4xx_hal::pac::{TIM2, USART1, USART2};
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::Config as Clocks;

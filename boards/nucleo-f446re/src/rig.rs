@@ -13,8 +13,8 @@
 use dexter_drivers::actuator::{ActuatorError, MotorModel, PaddleDrive};
 use dexter_drivers::camera::{Camera, RowToHeight};
 use dexter_drivers::encoder::{PaddleEncoder, QuadratureCounter};
-use dexter_drivers::rig::LineRig;
 use dexter_drivers::ConfigError;
+use dexter_rig::rig::LineRig;
 use stm32f4xx_hal::gpio::{Output, PushPull, PB5};
 use stm32f4xx_hal::pac::{TIM1, TIM3};
 use stm32f4xx_hal::prelude::*;

@@ -5,8 +5,8 @@
 //! interrupts' priority (the app's `step_window`), not with every interrupt masked.
 
 use cortex_m::peripheral::DWT;
-use dexter_drivers::periodic::PeriodClock;
 use dexter_firmware::board::{DwtCycles, StepTimer};
+use dexter_rig::periodic::PeriodClock;
 use stm32f4xx_hal::pac::TIM2;
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::timer::{CounterHz, Flag};
