@@ -50,6 +50,7 @@ CRATES = [
     ("shared", "dexter_core"),
     ("firmware", "dexter_firmware"),
     ("drivers", "dexter_drivers"),
+    ("rig", "dexter_rig"),
 ]
 
 # Layer tables, top layer first: (layer name, module prefixes in it). The host follows

@@ -47,6 +47,7 @@ if ! command -v qemu-system-arm >/dev/null; then
   fi
 fi
 qemu-system-arm -machine help | grep -q mps2-an386 || die "this qemu-system-arm lacks the mps2-an386 machine: install QEMU >= 7.2"
+qemu-system-arm -machine help | grep -q netduinoplus2 || die "this qemu-system-arm lacks the netduinoplus2 machine (the emulated NUCLEO-F446RE board): install QEMU >= 7.2"
 
 step "formatting (cargo fmt --check)"
 cargo fmt --all -- --check
@@ -59,6 +60,7 @@ step "lints (cargo clippy -D warnings), host crates and firmware"
 cargo clippy --all-targets -- -D warnings
 cargo clippy -p dexter-firmware --target "$TARGET" -- -D warnings
 cargo clippy -p dexter-nucleo-f446re --target "$TARGET" -- -D warnings
+cargo clippy -p dexter-nucleo-f446re --target "$TARGET" --features qemu-hsi -- -D warnings
 
 step "the core builds for $TARGET with each math backend"
 cargo build -p dexter-core --target "$TARGET"
@@ -85,7 +87,7 @@ python3 scripts/wcet.py "$ARM_FW" dexter_core::arm_control::ArmController::step 
 step "the NUCLEO-F446RE image builds for $TARGET (release); its sizes are checked by tests/board.rs"
 cargo build -p dexter-nucleo-f446re --release --target "$TARGET"
 
-step "unit, property, paper-reproduction, driver (embedded-hal-mock), HIL and board-size tests (cargo test)"
+step "unit, property, paper-reproduction, driver (embedded-hal-mock), HIL, board-size and emulated-board HIL (netduinoplus2) tests (cargo test)"
 cargo test --all-targets
 
 step "documentation builds without warnings"

@@ -3,10 +3,11 @@
 //! and stay within its budgets, and the documents quote the expected file. Regenerate on
 //! purpose with `DEXTER_BLESS=1 cargo test -p dexter-tests --test board`.
 //!
-//! The image cannot run here (no board; QEMU's netduinoplus2 hangs in its clock setup, see
-//! firmware/README.md), so what runs of it on the host is its board-independent code:
-//! `cargo test -p dexter-drivers`, and the serial-port HIL link in `dexter-sim`.
+//! The image itself cannot run here (QEMU's netduinoplus2 hangs in its HSE clock setup, see
+//! firmware/README.md, "Emulation"); the same image on the internal oscillator (feature
+//! `qemu-hsi`) runs in the loop under emulation in `host-sim/tests/board_hil.rs`.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -79,6 +80,33 @@ fn sections(b: &[u8]) -> Vec<(u64, u64, usize, usize, usize)> {
             )
         })
         .collect()
+}
+
+/// The `len` bytes the image holds at address `addr` (in a section with file contents).
+fn bytes_at(b: &[u8], addr: u64, len: usize) -> Option<&[u8]> {
+    let shoff = u32_at(b, 0x20) as usize;
+    let (entsize, count) = (u16_at(b, 0x2e), u16_at(b, 0x30));
+    (0..count).find_map(|i| {
+        let h = shoff + i * entsize;
+        let (ty, start) = (u32_at(b, h + 4), u32_at(b, h + 12));
+        let (off, size) = (u32_at(b, h + 16) as usize, u32_at(b, h + 20));
+        const NOBITS: u64 = 8;
+        let inside =
+            ty != NOBITS && start != 0 && addr >= start && addr + len as u64 <= start + size;
+        inside.then(|| &b[off + (addr - start) as usize..][..len])
+    })
+}
+
+/// The size of symbol `name` (its `st_size`).
+fn symbol_size(b: &[u8], name: &str) -> Option<u64> {
+    let all = sections(b);
+    let &(_, _, off, size, link) = all.iter().find(|s| s.0 == 2)?;
+    let strtab = all[link].2;
+    (off..off + size).step_by(16).find_map(|sym| {
+        let at = strtab + u32_at(b, sym) as usize;
+        let end = b[at..].iter().position(|&c| c == 0)?;
+        (&b[at..at + end] == name.as_bytes()).then(|| u32_at(b, sym + 8))
+    })
 }
 
 fn symbol(b: &[u8], name: &str) -> Option<u64> {
@@ -184,10 +212,171 @@ fn check_block(doc: &Path, block: &str) {
     );
 }
 
-/// One test, so the image is built once: golden sizes, budgets, documents.
+/// The `Configure` frame a HIL host sends for `scenes/line-juggler.toml`: the scene
+/// validated and turned into the core's parameters by the simulator, encoded by the core's
+/// protocol (`LockStep::start` sends exactly `HostMessage::Configure(C::config(params))`).
+fn host_configure() -> Vec<u8> {
+    use dexter_core::control::Controller;
+    use dexter_core::fixed_rate::FixedRate;
+    use dexter_core::protocol::{encode, HostMessage, Wire, MAX_FRAME_LEN};
+    let scene = dexter_tests::load_scene("line-juggler", &[]);
+    let params = scene.controller_params().expect("a sil scene");
+    <Controller as FixedRate>::new(params).expect("the core accepts the scene's tuning");
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    let n = encode(
+        &HostMessage::Configure(Controller::config(params)),
+        &mut buf,
+    )
+    .unwrap();
+    buf[..n].to_vec()
+}
+
+/// The stand-alone loop runs the scene's controller, bit for bit: the `Configure` frame
+/// linked into the board image (symbol `DEXTER_SCENE_CONFIGURE`, which `scene_params`
+/// decodes at reset) and the checked-in `scene.configure` it is built from are the
+/// host's frame for the line juggler's scene. (`dexter board scenes/line-juggler.toml
+/// --write boards/nucleo-f446re/scene.configure` regenerates the file.)
+fn assert_the_board_runs_the_scenes_controller(elf: &[u8]) {
+    let host = host_configure();
+    let file = std::fs::read(board_dir().join("scene.configure")).unwrap();
+    assert_eq!(
+        file, host,
+        "boards/nucleo-f446re/scene.configure is not scenes/line-juggler.toml's Configure: \
+         run `dexter board scenes/line-juggler.toml --write boards/nucleo-f446re/scene.configure`"
+    );
+    let addr = symbol(elf, "DEXTER_SCENE_CONFIGURE").expect("DEXTER_SCENE_CONFIGURE in the image");
+    let len = symbol_size(elf, "DEXTER_SCENE_CONFIGURE").unwrap() as usize;
+    assert_eq!(len, host.len(), "the linked frame's length");
+    let linked = bytes_at(elf, addr, len).expect("the frame's bytes in a loaded section");
+    assert_eq!(
+        linked,
+        &host[..],
+        "the board's built-in Configure is not the host's"
+    );
+}
+
+/// The image's functions by address, each with the addresses its direct calls and tail
+/// branches (`bl`, `b.w`, `b` to another function) go to, in program order, and the
+/// label `llvm-objdump -d` gives each (one of its names, where several alias it).
+struct CallGraph {
+    calls: HashMap<u64, Vec<u64>>,
+    labels: HashMap<String, u64>,
+}
+
+fn hex(t: &str) -> Option<u64> {
+    u64::from_str_radix(t.trim().trim_start_matches("0x"), 16).ok()
+}
+
+fn call_graph(elf: &Path) -> CallGraph {
+    let objdump = dexter_sim::hil::llvm_tool("llvm-objdump").unwrap_or_else(|e| panic!("{e}"));
+    let out = Command::new(objdump)
+        .args(["-d", "--no-show-raw-insn", "--triple=thumbv7em-none-eabihf"])
+        .arg(elf)
+        .output()
+        .expect("llvm-objdump runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut g = CallGraph {
+        calls: HashMap::new(),
+        labels: HashMap::new(),
+    };
+    let mut current = 0;
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let label = line.strip_suffix(">:").and_then(|l| l.split_once(" <"));
+        if let Some((addr, name)) = label.and_then(|(a, n)| Some((hex(a)?, n))) {
+            current = addr;
+            g.labels.insert(name.to_string(), addr);
+            g.calls.entry(addr).or_default();
+            continue;
+        }
+        let mut fields = line.split('\t').map(str::trim);
+        let op = fields.nth(1).unwrap_or("");
+        let operand = fields.next().unwrap_or("");
+        let to_function = operand.contains('<') && !operand.contains('+');
+        if matches!(op, "bl" | "b.w" | "b") && to_function {
+            if let Some(t) = operand.split_whitespace().next().and_then(hex) {
+                g.calls.entry(current).or_default().push(t);
+            }
+        }
+    }
+    g
+}
+
+/// Whether the function at `entry`'s first call is `goal`, or goes to a function whose
+/// first call is (a few levels down: cortex-m-rt's trampolines, the handlers they call).
+fn first_call_reaches(g: &CallGraph, entry: u64, goal: u64) -> bool {
+    let mut f = entry;
+    for _ in 0..4 {
+        match g.calls.get(&f).and_then(|calls| calls.first()) {
+            Some(&t) if t == goal => return true,
+            Some(&t) => f = t,
+            None => return false,
+        }
+    }
+    false
+}
+
+/// The fault paths, read from the linked image where the emulator cannot show them (it
+/// does not model TIM1, the GPIOs or the IWDG; `host-sim/tests/board_hil.rs` shows the
+/// paths it can run end in the motor cut): the HardFault (where a stack overflow and a
+/// panic's `udf` end), the unhandled-interrupt handler, the NMI and both panic handlers
+/// call `dexter_motor_off` before anything else; the watchdog is fed from the control
+/// task (TIM2's handler) and nowhere else, so a hung control task is reset.
+fn assert_every_fault_path_cuts_the_motor_first(elf: &Path) {
+    let g = call_graph(elf);
+    let bytes = std::fs::read(elf).unwrap();
+    let addr = |name: &str| {
+        symbol(&bytes, name)
+            .map(|a| a & !1) // the Thumb bit
+            .or_else(|| g.labels.get(name).copied())
+            .unwrap_or_else(|| panic!("no {name} in the image"))
+    };
+    let motor_off = addr("dexter_motor_off");
+    let panic_handler = g
+        .labels
+        .keys()
+        .find(|k| k.contains("rust_begin_unwind"))
+        .expect("a panic handler")
+        .clone();
+    for entry in [
+        "HardFault",
+        "DefaultHandler",
+        "NonMaskableInt",
+        "_defmt_panic",
+        &panic_handler,
+    ] {
+        assert!(
+            first_call_reaches(&g, addr(entry), motor_off),
+            "{entry} does not cut the motor first: it calls {:x?}",
+            g.calls.get(&addr(entry))
+        );
+    }
+    let feed = addr("dexter_feed_watchdog");
+    let feeders: Vec<u64> = g
+        .calls
+        .iter()
+        .filter(|(_, calls)| calls.contains(&feed))
+        .map(|(&f, _)| f)
+        .collect();
+    assert_eq!(feeders, [addr("TIM2")], "the watchdog's feeders");
+}
+
+/// One test, so the image is built once: golden sizes, budgets, documents, the scene.
 #[test]
 fn the_board_image_builds_fits_its_budgets_and_matches_the_expected_sizes() {
-    let s = sizes(&board_elf());
+    let elf = board_elf();
+    let bytes = std::fs::read(&elf).unwrap();
+    let marker = b"DEXTER_QEMU_HSI_IMAGE";
+    assert!(
+        !bytes.windows(marker.len()).any(|w| w == marker),
+        "the real image carries the emulator's marker (scripts/run-target.sh would not flash it)"
+    );
+    assert_the_board_runs_the_scenes_controller(&bytes);
+    assert_every_fault_path_cuts_the_motor_first(&elf);
+    let s = sizes(&elf);
     let actual = sizes_text(&s);
     let expected_path = board_dir().join("expected/sizes.txt");
     if bless() {
@@ -211,4 +400,85 @@ fn the_board_image_builds_fits_its_budgets_and_matches_the_expected_sizes() {
     let table = size_table(&expected);
     check_block(&root().join("firmware/README.md"), &table);
     check_block(&root().join("BENCHMARKS.md"), &table);
+}
+
+/// The camera-side sketch (`boards/nucleo-f446re/camera/frames.py`) encodes the frame the
+/// board's parser reads: its self-test checks the drivers' test vector byte for byte.
+#[test]
+fn the_camera_sketch_encodes_the_drivers_frame() {
+    let out = Command::new("python3")
+        .arg(board_dir().join("camera/frames.py"))
+        .arg("--selftest")
+        .output()
+        .expect("python3 runs");
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The workspace's runner (`scripts/run-target.sh`, `.cargo/config.toml`) picks the machine
+/// by image, so that `cargo run -p dexter-nucleo-f446re` from the root flashes the board
+/// instead of booting the F446 image in the QEMU image's mps2-an386: run on stand-in
+/// images with `probe-rs` and `qemu-system-arm` replaced by stubs that record their
+/// arguments.
+#[test]
+fn the_runner_flashes_the_board_image_and_emulates_the_others() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = std::env::temp_dir().join(format!("dexter-runner-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for tool in ["probe-rs", "qemu-system-arm"] {
+        let stub = dir.join(tool);
+        let script = format!(
+            "#!/bin/sh\necho \"{tool} $*\" > \"{}/called\"\n",
+            dir.display()
+        );
+        std::fs::write(&stub, script).unwrap();
+        std::fs::set_permissions(&stub, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    let image = |name: &str, text: &[u8]| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let cases = [
+        (
+            image("dexter-nucleo-f446re", b"\x7fELF board"),
+            "probe-rs run --chip STM32F446RETx",
+        ),
+        (
+            image(
+                "dexter-nucleo-f446re-qemu-hsi.elf",
+                b"\x7fELF DEXTER_QEMU_HSI_IMAGE",
+            ),
+            "qemu-system-arm -machine netduinoplus2",
+        ),
+        (
+            image("dexter-firmware", b"\x7fELF qemu"),
+            "qemu-system-arm -machine mps2-an386",
+        ),
+    ];
+    for (elf, want) in cases {
+        let out = Command::new(root().join("scripts/run-target.sh"))
+            .arg(&elf)
+            .env("PATH", format!("{}:/usr/bin:/bin", dir.display()))
+            .stdout(std::process::Stdio::null())
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let called = std::fs::read_to_string(dir.join("called")).unwrap();
+        assert!(
+            called.starts_with(want) && called.contains(elf.to_str().unwrap()),
+            "{}: ran {called}",
+            elf.display()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

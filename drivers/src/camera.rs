@@ -243,8 +243,9 @@ mod tests {
     #[test]
     fn a_frame_has_the_documented_bytes() {
         // y = 100.25 px = 1604/16 = 0x0644, x = 80.5 px = 1288/16 = 0x0508; CRC-8/SMBUS of
-        // [07 01 08 05 44 06] computed by hand with poly 0x07 gives 0x22 (checked below by
-        // a bitwise CRC written out here, not the crate).
+        // [07 01 08 05 44 06] with poly 0x07 is 0xD0 (the remainder of the bytes times x^8
+        // divided by x^8 + x^2 + x + 1; checked below by a bitwise CRC written out here, not
+        // the crate).
         let bytes = ball(7, 100.25).encode();
         assert_eq!(&bytes[..8], &[0xA5, 0x5A, 7, 1, 0x08, 0x05, 0x44, 0x06]);
         let mut crc = 0u8;
@@ -259,6 +260,7 @@ mod tests {
             }
         }
         assert_eq!(bytes[8], crc);
+        assert_eq!(bytes[8], 0xD0);
     }
 
     #[test]

@@ -1,8 +1,10 @@
 //! # dexter-drivers
 //!
-//! The board-independent layer between a microcontroller's HAL and the control core
-//! ([`dexter_core`]): drivers written against the embedded-hal 1.0 traits, so a board
-//! supplies HAL objects and the control code never names a register.
+//! Board-independent drivers written against the embedded-hal 1.0 traits, so a board
+//! supplies HAL objects and the control code never names a register. They know nothing of
+//! dexter's control core (no dependency on it: the crate could be published on its own);
+//! `dexter-rig` (`rig/`) turns their readings into the core's frames and the core's
+//! commands into their calls.
 //!
 //! - [`actuator`]: the paddle's DC motor as PWM duty plus a direction pin
 //!   (`embedded_hal::pwm::SetDutyCycle`, `embedded_hal::digital::OutputPin`), driven from
@@ -11,10 +13,6 @@
 //!   ([`encoder::QuadratureCounter`], with wrap handling);
 //! - [`camera`]: the ball's measurement from a serial camera's frames
 //!   (`embedded_hal_nb::serial::Read<u8>`), a resynchronising byte parser;
-//! - [`rig`]: the sensors and actuators one controller kind closes its loop through
-//!   ([`rig::Rig`]); [`rig::LineRig`] for the line juggler;
-//! - [`periodic`]: one fixed-rate control period on a hardware tick: the core's
-//!   `FixedRate::step`, overrun detection, and the core's safe state on an overrun.
 //!
 //! Everything here is tested on the host against `embedded-hal-mock` (`cargo test -p
 //! dexter-drivers`); the board crates (`boards/`) only construct HAL objects and call in.
@@ -25,7 +23,5 @@
 pub mod actuator;
 pub mod camera;
 pub mod encoder;
-pub mod periodic;
-pub mod rig;
 
 pub use actuator::ConfigError;

@@ -35,7 +35,7 @@ use crate::hosted::{Hosted, Params};
 use dexter_core::fixed_rate::{Fault, Telemetry};
 use dexter_core::protocol::{
     encode, Command, DecodeError, DeviceMessage, Frame, FrameDecoder, HostMessageOf, HostedKinds,
-    Partial, Rejection, RunSummary, MAX_FRAME_LEN,
+    Kind, Partial, Rejection, RunSummary, MAX_FRAME_LEN,
 };
 
 /// A host message as this image decodes it: the wire form of
@@ -88,10 +88,24 @@ pub fn write_all<L: embedded_io::Write>(link: &mut L, mut bytes: &[u8]) -> Resul
     Ok(())
 }
 
+/// What a board does when a host's `Configure` is accepted: the NUCLEO-F446RE ends its
+/// stand-alone juggling loop there (a valid decoded `Configure`, not any byte or a UART
+/// error, starts a host session). `()` does nothing (the QEMU image).
+pub trait SessionHook {
+    /// A `Configure` of `kind` was accepted; called before the answer is sent.
+    fn configured(&mut self, kind: Kind);
+}
+
+impl SessionHook for () {
+    #[inline(always)]
+    fn configured(&mut self, _: Kind) {}
+}
+
 /// The server state.
-pub struct Server<L, T> {
+pub struct Server<L, T, H = ()> {
     link: L,
     timer: T,
+    hook: H,
     decoder: FrameDecoder<MAX_FRAME_LEN>,
     controller: Option<Hosted>,
     last_seq: u32,
@@ -108,9 +122,22 @@ where
 {
     /// A server on `link`, unconfigured until the host sends [`HostMessage::Configure`].
     pub fn new(link: L, timer: T) -> Self {
+        Self::with_hook(link, timer, ())
+    }
+}
+
+impl<L, T, H> Server<L, T, H>
+where
+    L: embedded_io::Read + embedded_io::Write,
+    T: StepTimer,
+    H: SessionHook,
+{
+    /// [`Server::new`], calling `hook` at each accepted `Configure`.
+    pub fn with_hook(link: L, timer: T, hook: H) -> Self {
         Self {
             link,
             timer,
+            hook,
             decoder: FrameDecoder::new(),
             controller: None,
             last_seq: 0,
@@ -178,6 +205,7 @@ where
             }
             Ok(controller) => {
                 defmt::info!("configured: {}", kind);
+                self.hook.configured(kind);
                 self.controller = Some(controller);
                 self.missed = 0;
                 DeviceMessage::Configured { kind, ok: true }

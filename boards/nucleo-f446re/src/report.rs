@@ -8,7 +8,7 @@ use dexter_core::fixed_rate::{Fault, Mode};
 use dexter_core::protocol::ActuatorCommand;
 use dexter_drivers::actuator::Drive;
 use dexter_drivers::camera::CameraStats;
-use dexter_drivers::periodic::{PeriodOutcome, PeriodStats, Periodic};
+use dexter_rig::periodic::{PeriodOutcome, PeriodStats, Periodic};
 
 /// A snapshot of the loop, copied out of the period's task.
 #[derive(Clone, Copy, Default)]

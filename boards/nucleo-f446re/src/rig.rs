@@ -13,15 +13,15 @@
 use dexter_drivers::actuator::{ActuatorError, MotorModel, PaddleDrive};
 use dexter_drivers::camera::{Camera, RowToHeight};
 use dexter_drivers::encoder::{PaddleEncoder, QuadratureCounter};
-use dexter_drivers::rig::LineRig;
 use dexter_drivers::ConfigError;
+use dexter_rig::rig::LineRig;
 use stm32f4xx_hal::gpio::{Output, PushPull, PB5};
 use stm32f4xx_hal::pac::{TIM1, TIM3};
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::qei::Qei;
 use stm32f4xx_hal::timer::PwmChannel;
 
-use crate::uart_ring::RingReader;
+use dexter_firmware::uart::RingReader;
 
 /// PWM frequency of the motor driver, Hz (above hearing, within an MD10C's 20 kHz).
 pub const PWM_HZ: u32 = 20_000;

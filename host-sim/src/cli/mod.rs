@@ -9,6 +9,7 @@ pub mod registry;
 use crate::scene::SceneFile;
 use crate::system::Failure;
 use crate::verbs::basin::BasinRequest;
+use crate::verbs::board::BoardRequest;
 use crate::verbs::{AnalyzeRequest, RunRequest, SweepRequest};
 use clap::{Parser, Subcommand};
 use registry::{claim, Entry};
@@ -36,6 +37,9 @@ enum Command {
     Analyze(AnalyzeRequest),
     /// Run every point of a two-key grid to its end and classify it (basin map).
     Basin(BasinRequest),
+    /// What the NUCLEO-F446RE's stand-alone loop needs of a line scene: camera rate and
+    /// latency; `--write FILE`: the scene's Configure frame for the board's build.
+    Board(BoardRequest),
 }
 
 /// Where the default run finds `scenes/line-juggler.toml` and writes `out/`: the current
@@ -82,6 +86,7 @@ pub fn main() -> ExitCode {
         Command::Sweep(r) => ("sweep", &r.scene),
         Command::Analyze(r) => ("analyze", &r.scene),
         Command::Basin(r) => ("basin", &r.scene),
+        Command::Board(r) => ("board", &r.scene),
     };
     interrupt::install(format!("{verb} {}", scene.display()));
     let result = match command {
@@ -89,6 +94,9 @@ pub fn main() -> ExitCode {
         Command::Sweep(req) => with_scene(&req.scene, |s, f| (s.sweep)(f, &req)),
         Command::Analyze(req) => with_scene(&req.scene, |s, f| (s.analyze)(f, &req)),
         Command::Basin(req) => with_scene(&req.scene, |s, f| (s.basin)(f, &req)),
+        Command::Board(req) => with_scene(&req.scene, |s, f| {
+            crate::verbs::board::board(s.name, f, &req)
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -88,7 +88,7 @@ pub mod serial;
 pub use lockstep::LockStep;
 pub use qemu::{
     build_firmware, build_firmware_image, build_firmware_with_features, check_qemu,
-    check_toolchain, decode_defmt_log, default_firmware_elf, kill_all, workspace_root,
+    check_toolchain, decode_defmt_log, default_firmware_elf, kill_all, llvm_tool, workspace_root,
 };
 pub use report::LinkCounts;
 pub use serial::SerialPortOptions;

@@ -77,6 +77,40 @@ pub fn check_toolchain() -> Result<(), ControllerError> {
     Ok(())
 }
 
+/// An LLVM tool (`llvm-objdump`, `llvm-nm`) for inspecting a firmware image: `$LLVM_OBJDUMP`
+/// / `$LLVM_NM`, else on `PATH` (Debian's `llvm`), else rustup's `llvm-tools` in the
+/// sysroot (the search `scripts/wcet.py` makes); the error says what to install.
+pub fn llvm_tool(name: &str) -> Result<PathBuf, ControllerError> {
+    let var = format!("LLVM_{}", name.trim_start_matches("llvm-").to_uppercase());
+    if let Some(p) = std::env::var_os(var) {
+        return Ok(PathBuf::from(p));
+    }
+    let on_path = std::env::var_os("PATH")
+        .into_iter()
+        .flat_map(|p| std::env::split_paths(&p).collect::<Vec<_>>())
+        .map(|d| d.join(name))
+        .find(|p| p.is_file());
+    if let Some(p) = on_path {
+        return Ok(p);
+    }
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let sysroot = Command::new(&rustc).args(["--print", "sysroot"]).output();
+    let sysroot = sysroot.map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim()));
+    let bin = sysroot.ok().and_then(|s| {
+        let lib = s.join("lib/rustlib");
+        std::fs::read_dir(lib).ok()?.flatten().find_map(|host| {
+            let p = host.path().join("bin").join(name);
+            p.is_file().then_some(p)
+        })
+    });
+    bin.ok_or_else(|| {
+        link_err(format!(
+            "{name} not found: install Debian's llvm (`apt-get install llvm`) or \
+             `rustup component add llvm-tools`"
+        ))
+    })
+}
+
 /// Build the firmware (`cargo build -p dexter-firmware --release --target
 /// thumbv7em-none-eabihf` in the workspace root) and return the ELF's path.
 pub fn build_firmware() -> Result<PathBuf, ControllerError> {

@@ -7,6 +7,7 @@
 
 mod analyze;
 pub mod basin;
+pub mod board;
 mod run;
 mod sweep;
 

@@ -2,10 +2,10 @@
 //! core sees them (its `FixedRate::Frame` in, its `Command` out). [`LineRig`] is the line
 //! juggler's: the paddle's encoder and motor, and the ball camera.
 
-use crate::actuator::{Drive, DriveError, PaddleDrive};
-use crate::camera::{Camera, CameraStats, RowToHeight};
-use crate::encoder::{PaddleEncoder, PaddleSample, QuadratureCounter};
 use dexter_core::protocol::{ActuatorCommand, SensorFrame};
+use dexter_drivers::actuator::{Drive, DriveError, PaddleDrive};
+use dexter_drivers::camera::{Camera, CameraStats, RowToHeight};
+use dexter_drivers::encoder::{PaddleEncoder, PaddleSample, QuadratureCounter};
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
 use embedded_hal_nb::serial::Read;
@@ -136,9 +136,9 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::actuator::{Direction, MotorModel};
-    use crate::camera::CameraFrame;
-    use crate::encoder::QuadratureCounter;
+    use dexter_drivers::actuator::{Direction, MotorModel};
+    use dexter_drivers::camera::CameraFrame;
+    use dexter_drivers::encoder::QuadratureCounter;
     use embedded_hal_mock::eh1::digital::{Mock as PinMock, State, Transaction as Pin};
     use embedded_hal_mock::eh1::pwm::{Mock as PwmMock, Transaction as Pwm};
     use embedded_hal_mock::eh1::serial::{Mock as SerialMock, Transaction as Serial};

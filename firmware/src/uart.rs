@@ -1,17 +1,19 @@
-//! A UART's receive interrupt into a [`ByteRing`], and the two ways the main code reads it:
+//! A UART adapter for any board, generic over `embedded_hal_nb::serial::{Read, Write}`
+//! (what a HAL's serial receiver and transmitter implement): the receive interrupt's body
+//! into a [`ByteRing`] ([`on_receive`]), and the two ways the main code reads it:
 //! [`RingLink`], a byte stream (`embedded_io::{Read, ReadReady, Write}`) for the protocol
-//! server on the virtual COM port, and [`RingReader`], a non-blocking
-//! `embedded_hal_nb::serial::Read<u8>` for the ball camera's parser.
+//! server on the host link, and [`RingReader`], a non-blocking
+//! `embedded_hal_nb::serial::Read<u8>` for a sensor's parser (the ball camera's).
 //!
-//! The STM32's USART holds one received byte: at 921 600 Bd a byte arrives every 11 us, so
-//! the receive interrupt (the highest priority in the app, a few dozen cycles) moves each
-//! byte into the ring at once, and nothing else has to keep up with the line.
+//! A UART such as the STM32's USART holds one received byte: at 921 600 Bd a byte arrives
+//! every 11 us, so the receive interrupt (the highest priority in the app, a few dozen
+//! cycles) moves each byte into the ring at once, and nothing else has to keep up with the
+//! line.
 
+use crate::ring::{ByteRing, Consumer, Producer};
 use core::sync::atomic::{AtomicU32, Ordering};
-use dexter_firmware::ring::{ByteRing, Consumer, Producer};
 use embedded_hal_nb::nb;
 use embedded_hal_nb::serial::{ErrorKind, Read as NbRead, Write as NbWrite};
-use stm32f4xx_hal::serial::{Error, Instance, Rx, Tx};
 
 /// Receive ring length, bytes (power of two; one slot stays free).
 pub const RX_RING_LEN: usize = 256;
@@ -19,6 +21,7 @@ pub const RX_RING_LEN: usize = 256;
 const MAX_BYTES_PER_INTERRUPT: usize = 16;
 
 /// Counts a UART's receive errors (overrun, framing, noise, parity).
+#[derive(Default)]
 pub struct ErrorCount(AtomicU32);
 
 impl ErrorCount {
@@ -34,43 +37,62 @@ impl ErrorCount {
 }
 
 /// The receive interrupt's body: move what the USART holds into the ring; count errors
-/// (reading the data register after the status clears them).
-pub fn on_receive<U: Instance>(
-    rx: &mut Rx<U, u8>,
+/// (reading the data register after the status clears them). Returns the last byte moved.
+pub fn on_receive<R: NbRead<u8>>(
+    rx: &mut R,
     ring: &mut Producer<'static, RX_RING_LEN>,
     errors: &ErrorCount,
-) {
+) -> Option<u8> {
+    let mut last = None;
     for _ in 0..MAX_BYTES_PER_INTERRUPT {
         match rx.read() {
-            Ok(byte) => ring.push(byte),
+            Ok(byte) => {
+                ring.push(byte);
+                last = Some(byte);
+            }
             Err(nb::Error::WouldBlock) => break,
             Err(nb::Error::Other(_)) => {
                 errors.0.fetch_add(1, Ordering::Relaxed);
             }
         }
     }
+    last
 }
 
-/// The protocol server's link: the ring's consumer, and the USART's transmitter.
-pub struct RingLink<U: Instance> {
+/// The protocol server's link: the ring's consumer, and the UART's transmitter.
+pub struct RingLink<T> {
     rx: Consumer<'static, RX_RING_LEN>,
-    tx: Tx<U, u8>,
+    tx: T,
 }
 
-impl<U: Instance> RingLink<U> {
+impl<T: NbWrite<u8>> RingLink<T> {
     /// The link from its two halves.
-    pub fn new(rx: Consumer<'static, RX_RING_LEN>, tx: Tx<U, u8>) -> Self {
+    pub fn new(rx: Consumer<'static, RX_RING_LEN>, tx: T) -> Self {
         Self { rx, tx }
     }
 }
 
-impl<U: Instance> embedded_io::ErrorType for RingLink<U> {
-    type Error = Error;
+/// A transmitter's error as an `embedded_io` error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LinkError(pub ErrorKind);
+
+impl embedded_io::Error for LinkError {
+    fn kind(&self) -> embedded_io::ErrorKind {
+        embedded_io::ErrorKind::Other
+    }
 }
 
-impl<U: Instance> embedded_io::Read for RingLink<U> {
+fn link_error<E: embedded_hal_nb::serial::Error>(e: E) -> LinkError {
+    LinkError(e.kind())
+}
+
+impl<T: NbWrite<u8>> embedded_io::ErrorType for RingLink<T> {
+    type Error = LinkError;
+}
+
+impl<T: NbWrite<u8>> embedded_io::Read for RingLink<T> {
     /// Blocks, sleeping in `wfi`, until at least one byte arrived.
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Error> {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
         if buf.is_empty() {
             return Ok(0);
         }
@@ -94,24 +116,24 @@ impl<U: Instance> embedded_io::Read for RingLink<U> {
     }
 }
 
-impl<U: Instance> embedded_io::ReadReady for RingLink<U> {
-    fn read_ready(&mut self) -> Result<bool, Error> {
+impl<T: NbWrite<u8>> embedded_io::ReadReady for RingLink<T> {
+    fn read_ready(&mut self) -> Result<bool, LinkError> {
         Ok(!self.rx.is_empty())
     }
 }
 
-impl<U: Instance> embedded_io::Write for RingLink<U> {
-    /// Writes every byte, waiting for the transmitter (the HAL's own `embedded_io::Write`
-    /// returns `Ok(0)` while it is busy, which the server counts as a dead link).
-    fn write(&mut self, buf: &[u8]) -> Result<usize, Error> {
+impl<T: NbWrite<u8>> embedded_io::Write for RingLink<T> {
+    /// Writes every byte, waiting for the transmitter (a HAL's own `embedded_io::Write`
+    /// may return `Ok(0)` while it is busy, which the server counts as a dead link).
+    fn write(&mut self, buf: &[u8]) -> Result<usize, LinkError> {
         for &b in buf {
-            nb::block!(NbWrite::write(&mut self.tx, b))?;
+            nb::block!(NbWrite::write(&mut self.tx, b)).map_err(link_error)?;
         }
         Ok(buf.len())
     }
 
-    fn flush(&mut self) -> Result<(), Error> {
-        nb::block!(NbWrite::flush(&mut self.tx))
+    fn flush(&mut self) -> Result<(), LinkError> {
+        nb::block!(NbWrite::flush(&mut self.tx)).map_err(link_error)
     }
 }
 
