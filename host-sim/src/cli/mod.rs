@@ -9,6 +9,7 @@ pub mod registry;
 use crate::scene::SceneFile;
 use crate::system::Failure;
 use crate::verbs::basin::BasinRequest;
+use crate::verbs::merge::{MergeRequest, ShardSet};
 use crate::verbs::{AnalyzeRequest, RunRequest, SweepRequest};
 use clap::{Parser, Subcommand};
 use registry::{claim, Entry};
@@ -36,6 +37,8 @@ enum Command {
     Analyze(AnalyzeRequest),
     /// Run every point of a two-key grid to its end and classify it (basin map).
     Basin(BasinRequest),
+    /// Merge the shards of a sweep or basin map (`--shard K/N`) into its CSV and plots.
+    Merge(MergeRequest),
 }
 
 /// Where the default run finds `scenes/line-juggler.toml` and writes `out/`: the current
@@ -72,6 +75,16 @@ fn with_scene(
     verb(claim(&file.table), &file)
 }
 
+/// `dexter merge`: the shards checked, then merged by the system their scene belongs to.
+fn merge(req: &MergeRequest) -> Result<(), Failure> {
+    let set = ShardSet::open(req)?;
+    let entry = claim(&set.file.table);
+    match set.verb() {
+        "basin" => (entry.merge_basin)(set, req),
+        _ => (entry.merge_sweep)(set, req),
+    }
+}
+
 /// `dexter` with the process's arguments: the exit status of the verb (0, or the
 /// [`Failure`]'s code after printing `error: ` and its message on stderr).
 pub fn main() -> ExitCode {
@@ -82,6 +95,7 @@ pub fn main() -> ExitCode {
         Command::Sweep(r) => ("sweep", &r.scene),
         Command::Analyze(r) => ("analyze", &r.scene),
         Command::Basin(r) => ("basin", &r.scene),
+        Command::Merge(r) => ("merge", &r.out),
     };
     interrupt::install(format!("{verb} {}", scene.display()));
     let result = match command {
@@ -89,6 +103,7 @@ pub fn main() -> ExitCode {
         Command::Sweep(req) => with_scene(&req.scene, |s, f| (s.sweep)(f, &req)),
         Command::Analyze(req) => with_scene(&req.scene, |s, f| (s.analyze)(f, &req)),
         Command::Basin(req) => with_scene(&req.scene, |s, f| (s.basin)(f, &req)),
+        Command::Merge(req) => merge(&req),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -7,7 +7,9 @@
 
 mod analyze;
 pub mod basin;
+pub mod merge;
 mod run;
+mod shard;
 mod sweep;
 
 pub use analyze::analyze;
@@ -82,6 +84,10 @@ pub struct SweepRequest {
     /// Write the sweep's plot into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+    /// Run only the K-th of N shards of the grid (1 <= K <= N) into --csv FILE, for
+    /// `dexter merge`; a complete shard already there is kept.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
 }
 
 /// `dexter analyze SCENE ...` as parsed from the command line.
