@@ -345,10 +345,12 @@ impl ShardFile {
         let end = trailer(self.shard, self.points);
         match self.next.take() {
             Some(l) if l == end => {}
-            Some(l) if l.starts_with('#') => return Err(format!(
+            Some(l) if l.starts_with('#') => {
+                return Err(format!(
                 "{name} (shard {}): ends `{l}`, expected `{end}` (a different number of points)",
                 self.shard
-            )),
+            ))
+            }
             Some(l) => {
                 return Err(format!(
                     "{name} (shard {}): a row not of this shard's points: `{l}`",
