@@ -19,14 +19,15 @@
 //! point,control.kappa1_s2pm2,period,end,apex_height_m
 //! 1,2.0351758793969849e-2,,impacts,3.1355...e-1
 //! ...
-//! # end of shard 2/4: 50 points
+//! # end of shard 2/4: 50 points, rows CRC-64/XZ 5d0c1b3f7e2a9c48
 //! ```
 //!
 //! The `point` column is the point's index in the whole grid; the rest of each row is the
 //! row the unsharded command writes. The `sweep` line holds everything the merge needs to
 //! rebuild the sweep (the scene table with `--set` applied, the ranges, `--keep`), so the
 //! merge needs no scene file; its hash names the sweep. The last line says the shard is
-//! complete (the file is also written whole or not at all, [`crate::output`]).
+//! complete and what its rows' checksum is (the file is also written whole or not at all,
+//! [`crate::output`]).
 
 use crate::grid::Range;
 use crate::output::{AtomicFile, OutputError};
@@ -150,18 +151,21 @@ mod toml_text {
     }
 }
 
+/// CRC-64/XZ: the sweep's hash and the rows' checksum.
+const CRC: crc::Crc<u64> = crc::Crc::<u64>::new(&crc::CRC_64_XZ);
+
 /// The hash that names a sweep: CRC-64/XZ of its `sweep` line's JSON, 16 hex digits.
 pub fn hash(json: &str) -> String {
-    let crc = crc::Crc::<u64>::new(&crc::CRC_64_XZ);
-    format!("{:016x}", crc.checksum(json.as_bytes()))
+    format!("{:016x}", CRC.checksum(json.as_bytes()))
 }
 
 const SWEEP_LINE: &str = "# sweep ";
 const HASH_LINE: &str = "# sweep hash ";
 
-/// The trailer that ends a complete shard.
-fn trailer(shard: Shard, points: usize) -> String {
-    format!("# end of shard {shard}: {points} points")
+/// The trailer that ends a complete shard: its points and the CRC-64/XZ of its rows (the
+/// lines between the CSV header and the trailer, newlines included).
+fn trailer(shard: Shard, points: usize, rows: u64) -> String {
+    format!("# end of shard {shard}: {points} points, rows CRC-64/XZ {rows:016x}")
 }
 
 /// A shard's CSV being written: header, one prefixed row per CSV row, trailer; committed
@@ -170,6 +174,7 @@ pub struct ShardWriter {
     file: AtomicFile,
     shard: Shard,
     points: usize,
+    rows: crc::Digest<'static, u64>,
 }
 
 impl ShardWriter {
@@ -205,6 +210,7 @@ impl ShardWriter {
             file,
             shard,
             points,
+            rows: CRC.digest(),
         })
     }
 
@@ -212,15 +218,20 @@ impl ShardWriter {
     /// newline), each prefixed with `i`.
     pub fn push(&mut self, i: usize, rows: &[u8]) -> Result<(), OutputError> {
         let w = self.file.writer();
-        let r = rows
-            .split_inclusive(|&b| b == b'\n')
-            .try_for_each(|line| write!(w, "{i},").and_then(|_| w.write_all(line)));
+        let digest = &mut self.rows;
+        let r = rows.split_inclusive(|&b| b == b'\n').try_for_each(|line| {
+            let index = format!("{i},");
+            digest.update(index.as_bytes());
+            digest.update(line);
+            w.write_all(index.as_bytes())
+                .and_then(|_| w.write_all(line))
+        });
         r.map_err(|e| self.file.error(e))
     }
 
     /// Write the trailer and commit.
     pub fn commit(mut self) -> Result<(), OutputError> {
-        let end = trailer(self.shard, self.points);
+        let end = trailer(self.shard, self.points, self.rows.finalize());
         writeln!(self.file.writer(), "{end}").map_err(|e| self.file.error(e))?;
         self.file.commit()
     }
@@ -242,6 +253,7 @@ pub struct ShardFile {
     /// The next line not yet consumed.
     next: Option<String>,
     points: usize,
+    rows: crc::Digest<'static, u64>,
 }
 
 impl ShardFile {
@@ -292,6 +304,7 @@ impl ShardFile {
             lines,
             next,
             points: 0,
+            rows: CRC.digest(),
         })
     }
 
@@ -316,7 +329,11 @@ impl ShardFile {
             }
             let (index, row) = line.split_once(',').unwrap_or((line.as_str(), ""));
             match index.parse::<usize>() {
-                Ok(j) if j == i => rows.push(row.to_string()),
+                Ok(j) if j == i => {
+                    self.rows.update(line.as_bytes());
+                    self.rows.update(b"\n");
+                    rows.push(row.to_string())
+                }
                 Ok(j) if j > i => {
                     self.next = Some(line);
                     break;
@@ -339,12 +356,20 @@ impl ShardFile {
         Ok(rows)
     }
 
-    /// Check that every row was read and the file ends with its trailer.
+    /// Check that every row was read, and the file ends with its trailer, whose checksum
+    /// its rows have.
     pub fn finish(mut self) -> Result<(), String> {
         let name = self.path.display().to_string();
-        let end = trailer(self.shard, self.points);
+        let end = trailer(self.shard, self.points, self.rows.finalize());
+        let count = format!("# end of shard {}: {} points,", self.shard, self.points);
         match self.next.take() {
             Some(l) if l == end => {}
+            Some(l) if l.starts_with(&count) => {
+                return Err(format!(
+                    "{name} (shard {}): its rows do not match their checksum (`{l}`; they were changed)",
+                    self.shard
+                ))
+            }
             Some(l) if l.starts_with('#') => {
                 return Err(format!(
                 "{name} (shard {}): ends `{l}`, expected `{end}` (a different number of points)",
@@ -505,7 +530,15 @@ mod tests {
             text.starts_with("# dexter sweep shard 2/2 of s: 2 of 5 points\n"),
             "{text}"
         );
-        assert!(text.ends_with("point,a.b,v\n1,x,1\n1,x,2\n# end of shard 2/2: 2 points\n"));
+        let rows = "1,x,1\n1,x,2\n";
+        let end = format!(
+            "# end of shard 2/2: 2 points, rows CRC-64/XZ {:016x}\n",
+            CRC.checksum(rows.as_bytes())
+        );
+        assert!(
+            text.ends_with(&format!("point,a.b,v\n{rows}{end}")),
+            "{text}"
+        );
         let mut f = ShardFile::open(&path).unwrap();
         assert_eq!((f.shard, f.columns.as_str()), (shard, "a.b,v"));
         assert_eq!(f.id().unwrap(), id);
@@ -515,6 +548,10 @@ mod tests {
         assert_eq!(incomplete(&path, &json, shard, &[1, 3], "a.b,v"), None);
         assert!(incomplete(&path, &json, shard, &[1, 2, 3], "a.b,v").is_some());
         assert!(incomplete(&path, &json, Shard { k: 1, n: 2 }, &[1, 3], "a.b,v").is_some());
+        // a changed row is caught by the checksum
+        std::fs::write(&path, text.replace("1,x,2", "1,x,3")).unwrap();
+        let e = incomplete(&path, &json, shard, &[1, 3], "a.b,v").unwrap();
+        assert!(e.contains("checksum"), "{e}");
         // a truncated file is not complete
         std::fs::write(&path, &text[..text.len() - 10]).unwrap();
         let e = incomplete(&path, &json, shard, &[1, 3], "a.b,v").unwrap();

@@ -59,13 +59,17 @@ pub fn run<T: Send>(
     }
     let json = s.id.json().map_err(Failure::run)?;
     let mine = points_of(&partition(&s.costs, shard.n), shard);
-    if incomplete(path, &json, shard, &mine, &s.columns).is_none() {
-        note(format_args!(
-            "{}: shard {shard} of this {} is already complete: nothing to do",
-            path.display(),
-            s.id.verb
-        ));
-        return Ok(());
+    match incomplete(path, &json, shard, &mine, &s.columns) {
+        None => {
+            note(format_args!(
+                "{}: shard {shard} of this {} is already complete: nothing to do",
+                path.display(),
+                s.id.verb
+            ));
+            return Ok(());
+        }
+        Some(why) if path.exists() => note(format_args!("{why}: running shard {shard} again")),
+        Some(_) => {}
     }
     let total = s.costs.len();
     let mut w = ShardWriter::create(path, &s.id, &json, shard, (mine.len(), total), &s.columns)?;
