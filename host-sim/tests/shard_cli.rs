@@ -270,7 +270,7 @@ fn a_merge_refuses_missing_duplicated_mismatched_and_changed_shards_naming_them(
 fn a_killed_shard_leaves_no_output() {
     let d = scratch("shard-killed");
     let csv = d.join("s.csv");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dexter"))
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_dexter"))
         .args([
             "sweep",
             &scene("line-juggler"),

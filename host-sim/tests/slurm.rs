@@ -60,6 +60,10 @@ fn free_port() -> u16 {
 struct Cluster {
     dir: tempfile::TempDir,
     daemons: Vec<(&'static str, Child)>,
+    /// The `dexter` the tasks run.
+    bin: PathBuf,
+    /// The sweep's arguments after the scene.
+    sweep: String,
 }
 
 impl Drop for Cluster {
@@ -84,8 +88,9 @@ impl Drop for Cluster {
 }
 
 impl Cluster {
-    /// Write the config and start the daemons; wait until the node is idle.
-    fn start() -> Self {
+    /// Write the config and start the daemons; wait until the node is idle. The tasks will
+    /// run `bin` on the line juggler's sweep `sweep`.
+    fn start(bin: PathBuf, sweep: &str) -> Self {
         let missing: Vec<String> = PROGRAMS
             .iter()
             .filter(|(p, _)| program(p).is_none())
@@ -103,6 +108,8 @@ impl Cluster {
         let mut c = Self {
             dir,
             daemons: Vec::new(),
+            bin,
+            sweep: sweep.to_string(),
         };
         let d = c.dir.path().to_path_buf();
         for sub in ["key", "run", "state", "spool", "log", "out"] {
@@ -214,10 +221,10 @@ impl Cluster {
             .arg(format!("--output={}/job-%A_%a.log", self.out().display()))
             .args(args)
             .arg(script)
-            .env("DEXTER", env!("CARGO_BIN_EXE_dexter"))
+            .env("DEXTER", &self.bin)
             .env(
                 "DEXTER_ARGS",
-                format!("sweep {} {SWEEP}", common::scene("line-juggler")),
+                format!("sweep {} {}", common::scene("line-juggler"), self.sweep),
             )
             .env("DEXTER_OUT", self.out())
             .env("DEXTER_SHARDS", "4")
@@ -318,6 +325,7 @@ MpiDefault=none
 ReturnToService=2
 KillWait=5
 MinJobAge=600
+SchedulerParameters=sched_min_interval=100000
 NodeName=dexter-node NodeAddr=127.0.0.1 NodeHostname=localhost CPUs=2 RealMemory=1000 State=UNKNOWN
 PartitionName=debug Nodes=dexter-node Default=YES MaxTime=INFINITE State=UP
 ",
@@ -343,16 +351,81 @@ fn named(dir: &Path, prefix: &str) -> Vec<String> {
         .collect()
 }
 
+/// Run the unsharded sweep `sweep` with `bin` into `csv` (`threads`: RAYON_NUM_THREADS, or
+/// every core): its wall time.
+fn unsharded(bin: &Path, sweep: &str, csv: &Path, threads: Option<usize>) -> Duration {
+    let mut cmd = Command::new(bin);
+    cmd.arg("sweep").arg(common::scene("line-juggler"));
+    cmd.args(sweep.split(' ')).arg("--csv").arg(csv);
+    if let Some(n) = threads {
+        cmd.env("RAYON_NUM_THREADS", n.to_string());
+    }
+    let start = Instant::now();
+    let out = cmd.output().expect("dexter runs");
+    let took = start.elapsed();
+    assert!(
+        out.status.success(),
+        "the unsharded sweep failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    took
+}
+
+/// The speed-up of a 4-task array on this machine's CPUs over one serial process
+/// (`scripts/slurm-bench.sh`, BENCHMARKS.md "Sweeps on SLURM"): a measurement, not a check
+/// (ignored by `cargo test`). `DEXTER_BIN` is the dexter to measure (the release build),
+/// `DEXTER_BENCH_SWEEP` the sweep's arguments.
+#[test]
+#[ignore = "a benchmark: run by scripts/slurm-bench.sh"]
+fn bench_a_job_array_against_one_serial_process() {
+    let bin: PathBuf =
+        std::env::var_os("DEXTER_BIN").map_or(env!("CARGO_BIN_EXE_dexter").into(), PathBuf::from);
+    let sweep = std::env::var("DEXTER_BENCH_SWEEP").unwrap_or_else(|_| {
+        "--range control.kappa1_s2pm2=0.02:0.09:200 --set stop.impacts=20000 --set stop.duration_s=40000".into()
+    });
+    let cluster = Cluster::start(bin.clone(), &sweep);
+    let out = cluster.out();
+    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let serial = unsharded(&bin, &sweep, &out.join("serial.csv"), Some(1));
+    let rayon = unsharded(&bin, &sweep, &out.join("rayon.csv"), None);
+    let start = Instant::now();
+    let array = cluster.submit(&["--array=1-4"]);
+    let merge = cluster.submit(&[&format!("--dependency=afterok:{array}")]);
+    cluster.wait_done(&merge);
+    let slurm = start.elapsed();
+    cluster.wait_done(&array);
+    let expected = std::fs::read(out.join("serial.csv")).unwrap();
+    assert!(std::fs::read(out.join("merged.csv")).unwrap() == expected);
+    assert!(std::fs::read(out.join("rayon.csv")).unwrap() == expected);
+    let ratio = slurm.as_secs_f64() / serial.as_secs_f64();
+    println!("sweep: scenes/line-juggler.toml {sweep}");
+    println!(
+        "one process, serial (RAYON_NUM_THREADS=1):      {:7.2} s",
+        serial.as_secs_f64()
+    );
+    println!(
+        "one process, every core (rayon, {cpus} threads):     {:7.2} s  ({:.3} of serial)",
+        rayon.as_secs_f64(),
+        rayon.as_secs_f64() / serial.as_secs_f64()
+    );
+    println!(
+        "SLURM: 4 array tasks on {cpus} CPUs + merge job:     {:7.2} s  ({ratio:.3} of serial; goal <= 0.6)",
+        slurm.as_secs_f64()
+    );
+    println!("merged CSV = serial CSV = rayon CSV, byte for byte");
+    assert!(
+        ratio <= 0.6,
+        "the array took {ratio:.3} of the serial time, more than 0.6"
+    );
+}
+
 #[test]
 fn a_job_array_merges_to_the_unsharded_sweep_and_survives_a_killed_task() {
-    let cluster = Cluster::start();
+    let cluster = Cluster::start(env!("CARGO_BIN_EXE_dexter").into(), SWEEP);
     let out = cluster.out();
     // the unsharded sweep, in this process (on every core)
     let full = out.join("full.csv");
-    let mut args: Vec<String> = vec!["sweep".into(), common::scene("line-juggler")];
-    args.extend(SWEEP.split(' ').map(str::to_string));
-    args.extend(["--csv".into(), full.display().to_string()]);
-    common::ok(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    unsharded(&cluster.bin, SWEEP, &full, None);
     let expected = std::fs::read(&full).unwrap();
     let merged = out.join("merged.csv");
 

@@ -1,7 +1,8 @@
 //! `dexter basin`, for every system that classifies its runs ([`Basins`], issue 24 item 3):
 //! every point of a two-key grid (usually initial conditions) is run to its end and
-//! classified; the points are evaluated on every core and written in serial order (the
-//! shards of a larger map are the sub-grids given by `--range`/`--range2`).
+//! classified; the points are evaluated on every core and written in serial order. A
+//! larger map runs in shards (`--shard K/N`, [`crate::shard`]) merged by `dexter merge`
+//! ([`merge`]) into the same CSV, summary and plot.
 //!
 //! CSV (`--csv FILE`, else stdout): `KEY1,KEY2,class,certified`, one row per point
 //! (`certified` is `true`, `false` or empty when the system has no certificate for the
@@ -300,7 +301,7 @@ fn output(
     }
 
     if let Some(dir) = &req.plot {
-        let mut chart = Chart::new(format!("basin of {name}"), key_label(&kx), key_label(&ky));
+        let mut chart = Chart::new(format!("basin of {name}"), key_label(kx), key_label(ky));
         // one series per class, split by the certificate (the certified region is the set
         // of points drawn in the "(certified region)" colours); every series keeps its slot,
         // empty or not, so that a class has the same colour in every map

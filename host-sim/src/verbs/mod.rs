@@ -1,7 +1,9 @@
 //! The CLI's verbs, written once for every system: `run` ([`run()`]: `--impacts`,
 //! `--duration`, `--set`, `--json`, `--trace`, `--plot`, `--hil`), `sweep` ([`sweep()`]:
 //! `--range`, `--range2`, `--keep`, `--csv`, `--plot`) and `analyze` ([`analyze()`]:
-//! `--set`, `--json`; the analysis is the system's own). A system opts into each verb and
+//! `--set`, `--json`; the analysis is the system's own); `sweep` and `basin` also run one
+//! shard of their grid (`--shard K/N`, [`crate::shard`]) and `merge` ([`merge`]) joins the
+//! shards. A system opts into each verb and
 //! option (see [`crate::system::System`]); one it does not support is refused with exit
 //! status 2 and a message naming the option ([`crate::system::Failure`]).
 
