@@ -82,18 +82,22 @@ fn bad_shard_values_are_refused_naming_the_option() {
         &csv,
     ]);
     assert!(e.contains("--shard `3/2`"), "{e}");
-    // a sweep whose CSV does not hold its points cannot be sharded
+    // a sweep whose CSV does not hold its points (the feeder's: its planner's messages)
+    // cannot be sharded
     let e = refused(&[
         "sweep",
-        &scene("hopper-fig11"),
+        &scene("1joc-l-part"),
         "--range",
-        "hopper.thrust_tau_mps2=60:200:3",
+        "feeder.arrival.seed=1:3:3",
         "--shard",
         "1/2",
         "--csv",
         &csv,
     ]);
-    assert!(e.contains("--shard"), "{e}");
+    assert!(
+        e.contains("--shard is not available for feeder scenes"),
+        "{e}"
+    );
     assert!(!Path::new(&csv).exists(), "a refused shard wrote nothing");
 }
 
@@ -145,7 +149,7 @@ fn a_merged_line_sweep_is_the_unsharded_sweep_and_a_complete_shard_is_not_run_ag
 }
 
 #[test]
-fn a_merged_planar_map_and_basin_map_are_the_unsharded_ones() {
+fn merged_planar_and_hopper_sweeps_and_basin_maps_are_the_unsharded_ones() {
     let d = scratch("shard-planar");
     let s = scene("planar-triangle");
     let args = [
@@ -170,6 +174,31 @@ fn a_merged_planar_map_and_basin_map_are_the_unsharded_ones() {
     // the letter grid and count, with the merged CSV's name where the sweep named its own
     let summary = String::from_utf8(summary).unwrap();
     assert_eq!(String::from_utf8(out.stdout).unwrap(), summary);
+
+    let h = scratch("shard-hopper");
+    let s = scene("hopper-fig11");
+    let args = [
+        "sweep",
+        &s,
+        "--range",
+        "hopper.thrust_tau_mps2=60:200:7",
+        "--keep",
+        "6",
+    ];
+    let full = h.join("full.csv").display().to_string();
+    let mut a = args.to_vec();
+    a.extend(["--csv", &full]);
+    let summary = String::from_utf8(ok(&a).stdout).unwrap();
+    let files = shards(&h, &args, 3);
+    let merged = h.join("merged.csv").display().to_string();
+    let out = ok(&["merge", &merged, &files[0], &files[1], &files[2]]);
+    assert!(
+        read(Path::new(&merged)) == read(Path::new(&full)),
+        "hopper CSV differs"
+    );
+    // the summary names the CSV it wrote
+    let out = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(out.replace(&merged, &full), summary);
 
     let b = scratch("shard-basin");
     let s = scene("line-juggler-ideal");
