@@ -20,7 +20,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 /// The programs the test needs, and the Debian package of each.
-const PROGRAMS: [(&str, &str); 8] = [
+const PROGRAMS: [(&str, &str); 9] = [
     ("munged", "munge"),
     ("mungekey", "munge"),
     ("slurmctld", "slurmctld (slurm-wlm)"),
@@ -29,6 +29,7 @@ const PROGRAMS: [(&str, &str); 8] = [
     ("scontrol", "slurm-client (slurm-wlm)"),
     ("scancel", "slurm-client (slurm-wlm)"),
     ("sinfo", "slurm-client (slurm-wlm)"),
+    ("squeue", "slurm-client (slurm-wlm)"),
 ];
 
 /// The sweep: 200 points of the SIL line juggler, runs long enough (1000 impacts) that a
@@ -68,6 +69,26 @@ struct Cluster {
 
 impl Drop for Cluster {
     fn drop(&mut self) {
+        // jobs still running (a failed test) first: their steps are slurmd's, not ours
+        if self.daemons.len() == 3 {
+            let user = String::from_utf8_lossy(
+                &Command::new("id")
+                    .arg("-un")
+                    .output()
+                    .map_or(Vec::new(), |o| o.stdout),
+            )
+            .trim()
+            .to_string();
+            let _ = self.client("scancel").args(["-u", &user]).status();
+            let start = Instant::now();
+            while start.elapsed() < Duration::from_secs(10) {
+                let q = self.client("squeue").args(["-h", "-o", "%i"]).output();
+                if q.is_ok_and(|o| o.stdout.is_empty()) {
+                    break;
+                }
+                std::thread::sleep(Duration::from_millis(100));
+            }
+        }
         // the reverse of the start order: slurmd, slurmctld, munged
         for (name, child) in self.daemons.iter_mut().rev() {
             let pid = child.id() as libc::pid_t;
@@ -161,6 +182,14 @@ impl Cluster {
 
     fn spawn(&mut self, name: &'static str, mut cmd: Command, log: &Path) {
         let out = std::fs::File::create(log).unwrap();
+        // SAFETY: prctl(2) only, between fork and exec: the daemon is sent SIGTERM if this
+        // test's thread dies without its Drop (killed)
+        unsafe {
+            std::os::unix::process::CommandExt::pre_exec(&mut cmd, || {
+                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
+                Ok(())
+            });
+        }
         let child = cmd
             .env("SLURM_CONF", self.dir.path().join("slurm.conf"))
             .stdin(Stdio::null())
