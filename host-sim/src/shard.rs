@@ -13,13 +13,13 @@
 //! **The file.** A shard's CSV is whole on its own:
 //!
 //! ```text
-//! # dexter sweep shard 2/4 of line-juggler-chaotic: 50 of 200 points
-//! # sweep hash 8c1e2f0a9b7d6c53 (CRC-64/XZ of the sweep line below: scene, --set, ranges, --keep)
-//! # sweep {"verb":"sweep","scene":"line-juggler-chaotic","table":{...},"range":{...},...}
+//! # dexter sweep shard 2/4 of line-juggler: 50 of 200 points
+//! # sweep hash 8d868b8b92fb8675 (CRC-64/XZ of the sweep line below: scene, --set, ranges, --keep)
+//! # sweep {"verb":"sweep","scene":"line-juggler","table":"[actuator]\n...","range":{...},...}
 //! point,control.kappa1_s2pm2,period,end,apex_height_m
-//! 1,2.0351758793969849e-2,,impacts,3.1355...e-1
+//! 1,2.0351758793969849e-2,1,impacts,7.8507425482080173e-1
 //! ...
-//! # end of shard 2/4: 50 points, rows CRC-64/XZ 5d0c1b3f7e2a9c48
+//! # end of shard 2/4: 50 points, rows CRC-64/XZ 682f99007f97d3b3
 //! ```
 //!
 //! The `point` column is the point's index in the whole grid; the rest of each row is the
