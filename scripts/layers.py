@@ -70,7 +70,7 @@ LAYERS = {
         ("hil", ["hil"]),
         ("controller", ["controller"]),
         ("helpers", ["output", "plot", "filmstrip", "stream", "progress", "scene", "grid",
-                     "period"]),
+                     "period", "shard"]),
     ],
 }
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # All of dexter's tests, from a fresh machine: installs what it needs (the thumbv7em target
-# via rustup, qemu-system-arm from Debian) or stops saying exactly what to install.
+# via rustup, qemu-system-arm, slurm-wlm and munge from Debian) or stops saying exactly what to install.
 # Usage: scripts/test.sh            (CI runs exactly this through .ci/run)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -48,6 +48,22 @@ if ! command -v qemu-system-arm >/dev/null; then
 fi
 qemu-system-arm -machine help | grep -q mps2-an386 || die "this qemu-system-arm lacks the mps2-an386 machine: install QEMU >= 7.2"
 qemu-system-arm -machine help | grep -q netduinoplus2 || die "this qemu-system-arm lacks the netduinoplus2 machine (the emulated NUCLEO-F446RE board): install QEMU >= 7.2"
+
+# SLURM (host-sim/tests/slurm.rs starts a one-node cluster in a temporary directory)
+have() { command -v "$1" >/dev/null || [ -x "/usr/sbin/$1" ]; }
+if ! { have munged && have mungekey && have slurmctld && have slurmd && have sbatch; }; then
+  if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
+    step "installing slurm-wlm and munge from Debian (apt-get install slurm-wlm munge)"
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq slurm-wlm munge >/dev/null) \
+      || die "could not install SLURM: run 'sudo apt-get install slurm-wlm munge'"
+  elif command -v apt-get >/dev/null && command -v sudo >/dev/null; then
+    step "installing slurm-wlm and munge from Debian (sudo apt-get install slurm-wlm munge)"
+    (sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq slurm-wlm munge >/dev/null) \
+      || die "could not install SLURM: run 'sudo apt-get install slurm-wlm munge'"
+  else
+    die "slurm-wlm and munge (munged, mungekey, slurmctld, slurmd, sbatch) are required for the SLURM test: install them (Debian/Ubuntu: 'sudo apt-get install slurm-wlm munge')"
+  fi
+fi
 
 step "formatting (cargo fmt --check)"
 cargo fmt --all -- --check

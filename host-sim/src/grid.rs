@@ -18,7 +18,7 @@ pub const MAX_SWEEP_POINTS: u64 = 1_000_000;
 pub const CHUNK_POINTS: usize = 1024;
 
 /// A sweep range `key.path=FROM:TO:N` (N >= 2 values, inclusive ends; N = 1 runs FROM).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Range {
     /// Dotted key path.
     pub key: String,

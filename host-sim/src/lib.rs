@@ -21,6 +21,7 @@
 //! | [`controller`] | [`controller::StepController`]: a plant closes its loop through SIL or HIL alike |
 //! | [`scene`] | scene files read once, TOML errors with line and column, `--set`, key paths in errors |
 //! | [`grid`] | sweep ranges and the parallel, order-keeping evaluation of their grid |
+//! | [`shard`] | `--shard K/N`: which points a shard runs, the shard CSV it writes and `dexter merge` reads |
 //! | [`output`] | output files written whole or not at all; the CSV number format; JSON |
 //! | [`period`] | the period a late orbit has provably settled to |
 //! | [`plot`] | SVG + PNG charts |
@@ -43,6 +44,7 @@ pub mod period;
 pub mod plot;
 pub mod progress;
 pub mod scene;
+pub mod shard;
 pub mod stream;
 pub mod system;
 pub mod systems;

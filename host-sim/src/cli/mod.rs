@@ -10,6 +10,7 @@ use crate::scene::SceneFile;
 use crate::system::Failure;
 use crate::verbs::basin::BasinRequest;
 use crate::verbs::board::BoardRequest;
+use crate::verbs::merge::{MergeRequest, ShardSet};
 use crate::verbs::{AnalyzeRequest, RunRequest, SweepRequest};
 use clap::{Parser, Subcommand};
 use registry::{claim, Entry};
@@ -40,6 +41,8 @@ enum Command {
     /// What the NUCLEO-F446RE's stand-alone loop needs of a line scene: camera rate and
     /// latency; `--write FILE`: the scene's Configure frame for the board's build.
     Board(BoardRequest),
+    /// Merge the shards of a sweep or basin map (`--shard K/N`) into its CSV and plots.
+    Merge(MergeRequest),
 }
 
 /// Where the default run finds `scenes/line-juggler.toml` and writes `out/`: the current
@@ -76,6 +79,16 @@ fn with_scene(
     verb(claim(&file.table), &file)
 }
 
+/// `dexter merge`: the shards checked, then merged by the system their scene belongs to.
+fn merge(req: &MergeRequest) -> Result<(), Failure> {
+    let set = ShardSet::open(req)?;
+    let entry = claim(&set.file.table);
+    match set.verb() {
+        "basin" => (entry.merge_basin)(set, req),
+        _ => (entry.merge_sweep)(set, req),
+    }
+}
+
 /// `dexter` with the process's arguments: the exit status of the verb (0, or the
 /// [`Failure`]'s code after printing `error: ` and its message on stderr).
 pub fn main() -> ExitCode {
@@ -87,6 +100,7 @@ pub fn main() -> ExitCode {
         Command::Analyze(r) => ("analyze", &r.scene),
         Command::Basin(r) => ("basin", &r.scene),
         Command::Board(r) => ("board", &r.scene),
+        Command::Merge(r) => ("merge", &r.out),
     };
     interrupt::install(format!("{verb} {}", scene.display()));
     let result = match command {
@@ -97,6 +111,7 @@ pub fn main() -> ExitCode {
         Command::Board(req) => with_scene(&req.scene, |s, f| {
             crate::verbs::board::board(s.name, f, &req)
         }),
+        Command::Merge(req) => merge(&req),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,10 +6,14 @@ use crate::system::basin::Basins;
 use crate::system::{unsupported, Analyzes, Failure, Sweeps, System};
 use crate::systems::{arm, feeder, hopper, line, planar, planar_juggler};
 use crate::verbs::basin::BasinRequest;
+use crate::verbs::merge::{MergeRequest, ShardSet};
 use crate::verbs::{self, AnalyzeRequest, RunRequest, SweepRequest};
 
 /// One verb of one system on a scene.
 pub type Verb<R> = fn(&SceneFile, &R) -> Result<(), Failure>;
+
+/// `dexter merge` of one system's shards.
+pub type Merge = fn(ShardSet, &MergeRequest) -> Result<(), Failure>;
 
 /// One system as the CLI dispatches on it.
 #[derive(Clone, Copy)]
@@ -26,6 +30,10 @@ pub struct Entry {
     pub analyze: Verb<AnalyzeRequest>,
     /// `dexter basin` (refused for a system that does not classify its runs).
     pub basin: Verb<BasinRequest>,
+    /// `dexter merge` of a sweep's shards.
+    pub merge_sweep: Merge,
+    /// `dexter merge` of a basin map's shards.
+    pub merge_basin: Merge,
 }
 
 impl Entry {
@@ -38,6 +46,8 @@ impl Entry {
             sweep: no_sweep::<S>,
             analyze: no_analysis::<S>,
             basin: no_basin::<S>,
+            merge_sweep: no_merge::<S>,
+            merge_basin: no_merge::<S>,
         }
     }
 
@@ -45,6 +55,7 @@ impl Entry {
     pub const fn sweeps<S: Sweeps>(self) -> Self {
         Self {
             sweep: verbs::sweep::<S>,
+            merge_sweep: verbs::merge::merge_sweep::<S>,
             ..self
         }
     }
@@ -61,6 +72,7 @@ impl Entry {
     pub const fn basins<S: Basins>(self) -> Self {
         Self {
             basin: verbs::basin::basin::<S>,
+            merge_basin: verbs::basin::merge::<S>,
             ..self
         }
     }
@@ -69,6 +81,11 @@ impl Entry {
 /// `basin` refused for system `S` (exit 2).
 fn no_basin<S: System>(_: &SceneFile, _: &BasinRequest) -> Result<(), Failure> {
     Err(unsupported::<S>("basin"))
+}
+
+/// `merge` refused for system `S` (exit 2): it neither sweeps nor maps basins.
+fn no_merge<S: System>(_: ShardSet, _: &MergeRequest) -> Result<(), Failure> {
+    Err(unsupported::<S>("merge"))
 }
 
 /// `sweep` refused for system `S` (exit 2).

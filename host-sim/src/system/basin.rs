@@ -46,4 +46,12 @@ pub trait Basins: System {
         let _ = cfg;
         None
     }
+
+    /// The estimated cost of a run with `key` = `value`, relative to other values of the
+    /// same key (a point's is the product over its two axes): what the shards of a map
+    /// balance ([`crate::shard::partition`]). 1 unless the key sets the run's length.
+    fn cost(key: &str, value: f64) -> f64 {
+        let _ = (key, value);
+        1.0
+    }
 }

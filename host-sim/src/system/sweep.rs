@@ -29,6 +29,28 @@ pub trait Sweeps: System {
 
     /// A report for this sweep.
     fn report(base: &SweepBase<Self>) -> Self::Report;
+
+    /// True if the sweep can be sharded (`--shard K/N`, `dexter merge`): its CSV rows hold
+    /// all that its report keeps of a point, so [`Sweeps::read_point`] reads them back.
+    const SHARDS: bool = false;
+
+    /// The estimated cost of a run with `key` = `value`, relative to other values of the
+    /// same key (a point's cost is the product over its axes): what the shards balance
+    /// ([`crate::shard::partition`]). 1 unless the key sets the run's length.
+    fn cost(key: &str, value: f64) -> f64 {
+        let _ = (key, value);
+        1.0
+    }
+
+    /// The point whose CSV rows (as [`SweepReport::write_csv`] wrote them at `x`, `y`) are
+    /// `rows`: the inverse of `write_csv`, for `dexter merge` (only if [`Sweeps::SHARDS`]).
+    fn read_point(x: f64, y: Option<f64>, rows: &[String]) -> Result<Self::Point, String> {
+        let _ = (x, y, rows);
+        Err(format!(
+            "a {} sweep cannot be read back from its CSV",
+            Self::NAME
+        ))
+    }
 }
 
 /// What every point of a sweep starts from.

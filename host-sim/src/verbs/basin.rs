@@ -1,7 +1,8 @@
 //! `dexter basin`, for every system that classifies its runs ([`Basins`], issue 24 item 3):
 //! every point of a two-key grid (usually initial conditions) is run to its end and
-//! classified; the points are evaluated on every core and written in serial order (the
-//! shards of a larger map are the sub-grids given by `--range`/`--range2`).
+//! classified; the points are evaluated on every core and written in serial order. A
+//! larger map runs in shards (`--shard K/N`, [`crate::shard`]) merged by `dexter merge`
+//! ([`merge`]) into the same CSV, summary and plot.
 //!
 //! CSV (`--csv FILE`, else stdout): `KEY1,KEY2,class,certified`, one row per point
 //! (`certified` is `true`, `false` or empty when the system has no certificate for the
@@ -10,18 +11,21 @@
 //! the certified region. `--plot DIR` writes `{scene}-basin` (SVG + PNG): one colour per
 //! class, the certified points ringed.
 
+use super::merge::{MergeRequest, ShardSet};
+use super::shard::{self, ShardRun};
 use crate::grid::{map_ordered, Grid, Range};
 use crate::output::{AtomicFile, Sig17};
 use crate::plot::{key_label, Chart, Style};
 use crate::progress;
 use crate::scene::{parse_sets, SceneFile};
+use crate::shard::SweepId;
 use crate::system::basin::{BasinClass, Basins};
 use crate::system::{Failure, Setup};
 use clap::Args;
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// `dexter basin SCENE ...` as parsed from the command line.
 #[derive(Args, Clone, Debug, Default, PartialEq)]
@@ -46,12 +50,89 @@ pub struct BasinRequest {
     /// Print the summary as one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Run only the K-th of N shards of the grid (1 <= K <= N) into --csv FILE, for
+    /// `dexter merge`; a complete shard already there is kept.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
 }
 
 /// One classified point.
 struct Point {
     class: BasinClass,
     certified: Option<bool>,
+}
+
+/// Every class `dexter basin` writes but the other periods, for reading a name back.
+const CLASSES: [BasinClass; 5] = [
+    BasinClass::Target,
+    BasinClass::NotSettled,
+    BasinClass::Rest,
+    BasinClass::Safe,
+    BasinClass::Failed,
+];
+
+impl Point {
+    /// Its CSV row `KEY1,KEY2,class,certified` (with the newline).
+    fn row(&self, vx: f64, vy: f64) -> String {
+        let c = self.certified.map_or(String::new(), |c| c.to_string());
+        format!("{},{},{},{c}\n", Sig17(vx), Sig17(vy), self.class.name())
+    }
+
+    /// The point of a row [`Point::row`] wrote (without the newline).
+    fn read(row: &str) -> Result<(f64, f64, Point), String> {
+        let cells: Vec<&str> = row.split(',').collect();
+        let [x, y, class, certified] = cells[..] else {
+            return Err(format!("`{row}` has not the basin map's 4 columns"));
+        };
+        let num = |s: &str| s.parse::<f64>().map_err(|_| format!("bad number `{s}`"));
+        let period = class.strip_prefix("period_").and_then(|p| p.parse().ok());
+        let class = match period {
+            Some(p) => BasinClass::OtherPeriod(p),
+            None => *CLASSES
+                .iter()
+                .find(|c| c.name() == class)
+                .ok_or_else(|| format!("unknown class `{class}`"))?,
+        };
+        let certified = match certified {
+            "" => None,
+            c => Some(c.parse().map_err(|_| format!("bad certified `{c}`"))?),
+        };
+        Ok((num(x)?, num(y)?, Point { class, certified }))
+    }
+}
+
+/// The CSV header.
+fn header(kx: &str, ky: &str) -> String {
+    format!("{kx},{ky},class,certified")
+}
+
+/// Run the scene `file` with `base` overrides and `kx` = `vx`, `ky` = `vy` to its end and
+/// classify it.
+fn evaluate<S: Basins>(
+    file: &SceneFile,
+    base: &[(String, toml::Value)],
+    (kx, vx): (&str, f64),
+    (ky, vy): (&str, f64),
+) -> Result<Point, Failure> {
+    let mut sets = base.to_vec();
+    sets.extend(parse_sets(&[
+        format!("{kx}={}", Sig17(vx)),
+        format!("{ky}={}", Sig17(vy)),
+    ])?);
+    let cfg = S::parse(file, file.table_with(&sets)?)?;
+    let setup = Setup {
+        plot: false,
+        progress: false,
+    };
+    let class = match S::run(&cfg, None, &setup, &mut |_| {}) {
+        Ok(out) => S::classify(&cfg, &out),
+        Err(f) if f.code == crate::system::EXIT_SCENE => return Err(f),
+        Err(_) => BasinClass::Failed,
+    };
+    Ok(Point {
+        class,
+        certified: S::certified(&cfg),
+    })
 }
 
 /// `dexter basin` on a scene of system `S`.
@@ -62,52 +143,104 @@ pub fn basin<S: Basins>(file: &SceneFile, req: &BasinRequest) -> Result<(), Fail
     let grid = Grid::new(x, Some(y))?;
     let base = parse_sets(&req.sets)?;
     // the base scene once, so that a bad file fails before the map starts
-    let name = {
-        let cfg = S::parse(file, file.table_with(&base)?)?;
-        let _ = cfg;
-        file.stem.clone()
+    let table = file.table_with(&base)?;
+    S::parse(file, table.clone())?;
+    let point = |i: usize| {
+        let (vx, vy) = grid.point(i);
+        let vy = vy.unwrap_or(f64::NAN);
+        Ok::<_, Failure>((vx, vy, evaluate::<S>(file, &base, (&kx, vx), (&ky, vy))?))
     };
+    if let Some(spec) = &req.shard {
+        let id = SweepId {
+            verb: "basin".into(),
+            scene: file.stem.clone(),
+            table,
+            range: grid.x.clone(),
+            range2: grid.y.clone(),
+            keep: 0,
+        };
+        let run = ShardRun {
+            id,
+            spec,
+            csv: req.csv.as_deref(),
+            plot: req.plot.is_some(),
+            columns: header(&kx, &ky),
+            costs: shard::costs(&grid, S::cost),
+        };
+        return shard::run(run, point, |_, (vx, vy, p)| Ok(p.row(vx, vy).into_bytes()));
+    }
     let bar = progress::bar(grid.len() as u64, "points", !req.json);
     let mut rows: Vec<(f64, f64, Point)> = Vec::with_capacity(grid.len());
-    let done = map_ordered(
-        grid.len(),
-        &bar,
-        |i| {
-            let (vx, vy) = grid.point(i);
-            let vy = vy.unwrap_or(f64::NAN);
-            let mut sets = base.clone();
-            sets.extend(parse_sets(&[
-                format!("{kx}={}", Sig17(vx)),
-                format!("{ky}={}", Sig17(vy)),
-            ])?);
-            let cfg = S::parse(file, file.table_with(&sets)?)?;
-            let setup = Setup {
-                plot: false,
-                progress: false,
-            };
-            let class = match S::run(&cfg, None, &setup, &mut |_| {}) {
-                Ok(out) => S::classify(&cfg, &out),
-                Err(f) if f.code == crate::system::EXIT_SCENE => return Err(f),
-                Err(_) => BasinClass::Failed,
-            };
-            Ok(Point {
-                class,
-                certified: S::certified(&cfg),
-            })
-        },
-        |i, p| {
-            let (vx, vy) = grid.point(i);
-            rows.push((vx, vy.unwrap_or(f64::NAN), p));
-            Ok(())
-        },
-    );
+    let done = map_ordered(grid.len(), &bar, point, |_, p| {
+        rows.push(p);
+        Ok(())
+    });
     bar.finish_and_clear();
     done?;
+    let out = Output {
+        csv: req.csv.as_deref(),
+        plot: req.plot.as_deref(),
+        json: req.json,
+    };
+    output(&file.stem, (&kx, &ky), &rows, out)
+}
 
-    let mut csv = format!("{kx},{ky},class,certified\n");
-    for (vx, vy, p) in &rows {
-        let c = p.certified.map_or(String::new(), |c| c.to_string());
-        csv += &format!("{},{},{},{c}\n", Sig17(*vx), Sig17(*vy), p.class.name());
+/// `dexter merge` of a basin map's shards: the map's CSV, summary and plot, as `dexter
+/// basin` writes them.
+pub fn merge<S: Basins>(mut set: ShardSet, req: &MergeRequest) -> Result<(), Failure> {
+    let grid = Grid::new(set.id.range.clone(), set.id.range2.clone())?;
+    let Some(ry) = &grid.y else {
+        return Err(Failure::usage("a basin map's shards name two ranges"));
+    };
+    let (kx, ky) = (grid.x.key.clone(), ry.key.clone());
+    S::parse(&set.file, set.file.table.clone())?;
+    set.check_columns(&header(&kx, &ky))?;
+    let owner = set.owners(&shard::costs(&grid, S::cost));
+    let mut rows = Vec::with_capacity(grid.len());
+    for (i, &k) in owner.iter().enumerate() {
+        let (vx, vy) = grid.point(i);
+        let vy = vy.unwrap_or(f64::NAN);
+        let (lines, name) = set.rows(k, i)?;
+        let bad = |why: String| Failure::usage(format!("{name}: point {i}: {why}"));
+        let [line] = &lines[..] else {
+            return Err(bad(format!("{} rows, not one", lines.len())));
+        };
+        let (_, _, p) = Point::read(line).map_err(bad)?;
+        if p.row(vx, vy) != format!("{line}\n") {
+            return Err(bad(format!(
+                "`{line}` is not the row `dexter basin` writes at {kx} = {vx}, {ky} = {vy}"
+            )));
+        }
+        rows.push((vx, vy, p));
+    }
+    let name = set.id.scene.clone();
+    set.finish()?;
+    let out = Output {
+        csv: Some(&req.out),
+        plot: req.plot.as_deref(),
+        json: req.json,
+    };
+    output(&name, (&kx, &ky), &rows, out)
+}
+
+/// Where a basin map goes.
+struct Output<'a> {
+    csv: Option<&'a Path>,
+    plot: Option<&'a Path>,
+    json: bool,
+}
+
+/// Write the map of `rows` (in grid order) of scene `name` over `kx` x `ky`: its CSV, its
+/// summary and its plot.
+fn output(
+    name: &str,
+    (kx, ky): (&str, &str),
+    rows: &[(f64, f64, Point)],
+    req: Output<'_>,
+) -> Result<(), Failure> {
+    let mut csv = header(kx, ky) + "\n";
+    for (vx, vy, p) in rows {
+        csv += &p.row(*vx, *vy);
     }
     match &req.csv {
         Some(path) => {
@@ -121,7 +254,7 @@ pub fn basin<S: Basins>(file: &SceneFile, req: &BasinRequest) -> Result<(), Fail
     }
 
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
-    for (_, _, p) in &rows {
+    for (_, _, p) in rows {
         *counts.entry(p.class.name()).or_default() += 1;
     }
     let n = rows.len();
@@ -168,7 +301,7 @@ pub fn basin<S: Basins>(file: &SceneFile, req: &BasinRequest) -> Result<(), Fail
     }
 
     if let Some(dir) = &req.plot {
-        let mut chart = Chart::new(format!("basin of {name}"), key_label(&kx), key_label(&ky));
+        let mut chart = Chart::new(format!("basin of {name}"), key_label(kx), key_label(ky));
         // one series per class, split by the certificate (the certified region is the set
         // of points drawn in the "(certified region)" colours); every series keeps its slot,
         // empty or not, so that a class has the same colour in every map

@@ -1,14 +1,18 @@
 //! The CLI's verbs, written once for every system: `run` ([`run()`]: `--impacts`,
 //! `--duration`, `--set`, `--json`, `--trace`, `--plot`, `--hil`), `sweep` ([`sweep()`]:
 //! `--range`, `--range2`, `--keep`, `--csv`, `--plot`) and `analyze` ([`analyze()`]:
-//! `--set`, `--json`; the analysis is the system's own). A system opts into each verb and
+//! `--set`, `--json`; the analysis is the system's own); `sweep` and `basin` also run one
+//! shard of their grid (`--shard K/N`, [`crate::shard`]) and `merge` ([`merge`]) joins the
+//! shards. A system opts into each verb and
 //! option (see [`crate::system::System`]); one it does not support is refused with exit
 //! status 2 and a message naming the option ([`crate::system::Failure`]).
 
 mod analyze;
 pub mod basin;
 pub mod board;
+pub mod merge;
 mod run;
+mod shard;
 mod sweep;
 
 pub use analyze::analyze;
@@ -83,6 +87,10 @@ pub struct SweepRequest {
     /// Write the sweep's plot into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+    /// Run only the K-th of N shards of the grid (1 <= K <= N) into --csv FILE, for
+    /// `dexter merge`; a complete shard already there is kept.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
 }
 
 /// `dexter analyze SCENE ...` as parsed from the command line.

@@ -7,11 +7,13 @@
 //! summary and plot need. Then the summary is printed (to stdout with `--csv`, else to
 //! stderr, after the CSV), and the plot drawn.
 
+use super::shard::{self, ShardRun};
 use super::SweepRequest;
 use crate::grid::{map_ordered, Grid, Range};
 use crate::output::{self, note, print_stderr, print_stdout, AtomicFile, Batch};
 use crate::progress;
 use crate::scene::{check_key, parse_sets, SceneFile};
+use crate::shard::SweepId;
 use crate::system::{unsupported, Failure, SweepBase, SweepReport, Sweeps};
 use std::io::Write;
 use std::path::Path;
@@ -56,6 +58,9 @@ pub fn sweep<S: Sweeps>(file: &SceneFile, req: &SweepRequest) -> Result<(), Fail
         grid,
         keep: req.keep,
     };
+    if let Some(spec) = &req.shard {
+        return sweep_shard(&base, req, spec);
+    }
     let mut report = S::report(&base);
     // `--csv -` (or /dev/stdout) is the CSV on stdout, as without `--csv`
     let csv_file = req.csv.as_deref().filter(|p| !output::is_stdout(p));
@@ -86,11 +91,67 @@ pub fn sweep<S: Sweeps>(file: &SceneFile, req: &SweepRequest) -> Result<(), Fail
     );
     bar.finish_and_clear();
     swept?;
+    finish::<S>(&report, csv, csv_file, req.plot.as_deref())
+}
+
+/// The estimated cost of every point of `base`'s grid ([`Sweeps::cost`]).
+pub fn costs<S: Sweeps>(base: &SweepBase<S>) -> Vec<f64> {
+    shard::costs(&base.grid, S::cost)
+}
+
+/// `dexter sweep --shard K/N`: the shard's points, in a shard CSV ([`crate::shard`]).
+fn sweep_shard<S: Sweeps>(
+    base: &SweepBase<S>,
+    req: &SweepRequest,
+    spec: &str,
+) -> Result<(), Failure> {
+    if !S::SHARDS {
+        return Err(unsupported::<S>("--shard"));
+    }
+    let report = S::report(base);
+    let id = SweepId {
+        verb: "sweep".into(),
+        scene: base.file.stem.clone(),
+        table: base.table.clone(),
+        range: base.grid.x.clone(),
+        range2: base.grid.y.clone(),
+        keep: req.keep,
+    };
+    let run = ShardRun {
+        id,
+        spec,
+        csv: req.csv.as_deref(),
+        plot: req.plot.is_some(),
+        columns: report.csv_header(),
+        costs: costs(base),
+    };
+    let eval = |i| {
+        let (x, y) = base.grid.point(i);
+        S::point(base, x, y)
+    };
+    shard::run(run, eval, |i, p| {
+        let (x, y) = base.grid.point(i);
+        let mut rows = Vec::new();
+        report
+            .write_csv(x, y, &p, &mut rows)
+            .map_err(Failure::run)?;
+        Ok(rows)
+    })
+}
+
+/// The end of a sweep whose rows are all in `csv` (from the points, or merged from its
+/// shards): commit it, print the summary and draw the plot, all or nothing.
+pub(super) fn finish<S: Sweeps>(
+    report: &S::Report,
+    csv: AtomicFile,
+    csv_file: Option<&Path>,
+    plot: Option<&Path>,
+) -> Result<(), Failure> {
     // the CSV file and the plot appear together, and only if the whole sweep succeeds
     let batch = Batch::begin();
     csv.commit()?;
     let summary = report.summary(csv_file)?;
-    let written = match &req.plot {
+    let written = match plot {
         Some(dir) => report.plot(dir)?,
         None => Vec::new(),
     };

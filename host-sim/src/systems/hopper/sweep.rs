@@ -43,6 +43,15 @@ fn value_for(key: &str, v: f64) -> Result<toml::Value, Failure> {
     Ok(toml::Value::Float(v))
 }
 
+/// Every run end, for reading a name back.
+const RUN_ENDS: [RunEnd; 5] = [
+    RunEnd::Completed,
+    RunEnd::NoLiftoff,
+    RunEnd::WeakThrust,
+    RunEnd::StepCap,
+    RunEnd::NonFinite,
+];
+
 /// One swept value.
 pub struct HopperPoint {
     alpha: Option<f64>,
@@ -103,6 +112,52 @@ impl Sweeps for HopperSystem {
 
     fn point(base: &SweepBase<Self>, x: f64, _: Option<f64>) -> Result<HopperPoint, Failure> {
         late_cycles(base, x)
+    }
+
+    const SHARDS: bool = true;
+
+    fn cost(key: &str, value: f64) -> f64 {
+        match key {
+            "hopper.cycles" => value,
+            _ => 1.0,
+        }
+    }
+
+    /// The rows `KEY,alpha,period,end,cycle,bottom_height_m,energy` of one value (one row
+    /// with empty cycle cells if it kept none).
+    fn read_point(_: f64, _: Option<f64>, rows: &[String]) -> Result<HopperPoint, String> {
+        let num = |s: &str| s.parse::<f64>().map_err(|_| format!("bad number `{s}`"));
+        let mut p = HopperPoint {
+            alpha: None,
+            period: None,
+            end: RunEnd::Completed,
+            transient: 0,
+            kept: Vec::with_capacity(rows.len()),
+        };
+        for (i, row) in rows.iter().enumerate() {
+            let cells: Vec<&str> = row.split(',').collect();
+            let [_, alpha, period, end, cycle, x, e] = cells[..] else {
+                return Err(format!("`{row}` has not the hopper sweep's 7 columns"));
+            };
+            p.alpha = (!alpha.is_empty()).then(|| num(alpha)).transpose()?;
+            p.period = match period {
+                "" => None,
+                q => Some(q.parse().map_err(|_| format!("bad period `{q}`"))?),
+            };
+            p.end = *RUN_ENDS
+                .iter()
+                .find(|r| end_name(**r) == end)
+                .ok_or_else(|| format!("unknown end `{end}`"))?;
+            if cycle.is_empty() {
+                continue;
+            }
+            let c: usize = cycle.parse().map_err(|_| format!("bad cycle `{cycle}`"))?;
+            if i == 0 {
+                p.transient = c;
+            }
+            p.kept.push((num(x)?, num(e)?));
+        }
+        Ok(p)
     }
 
     fn report(base: &SweepBase<Self>) -> HopperSweepReport {

@@ -33,4 +33,8 @@ impl Basins for LineSystem {
         let egas = matches!(cert.verdict, Verdict::Certified { .. });
         Some(egas && b >= 0.0 && speed2 > 0.0 && speed2.sqrt() < cert.interval.1)
     }
+
+    fn cost(key: &str, value: f64) -> f64 {
+        super::sweep::run_cost(key, value)
+    }
 }

@@ -68,6 +68,18 @@ fn late_point(
     })
 }
 
+/// Every end, for reading a name back.
+const ENDS: [End; 4] = [End::Impacts, End::Duration, End::Resting, End::Diverged];
+
+/// The estimated cost of a run with `key` = `value` (for the shards of a sweep or a basin
+/// map): the run's length where the key sets it, else 1.
+pub fn run_cost(key: &str, value: f64) -> f64 {
+    match key {
+        "stop.impacts" | "stop.duration_s" => value,
+        _ => 1.0,
+    }
+}
+
 /// The end's name in the CSV.
 fn end_name(e: End) -> &'static str {
     match e {
@@ -130,6 +142,40 @@ impl Sweeps for LineSystem {
             points: Decimator::default(),
         }
     }
+
+    const SHARDS: bool = true;
+
+    fn cost(key: &str, value: f64) -> f64 {
+        run_cost(key, value)
+    }
+
+    /// The rows `KEY,period,end,apex_height_m` of one run (none if it kept no apex).
+    fn read_point(_: f64, _: Option<f64>, rows: &[String]) -> Result<LatePoint, String> {
+        let mut p = LatePoint {
+            apexes: Vec::with_capacity(rows.len()),
+            period: None,
+            end: End::Impacts,
+        };
+        for row in rows {
+            let cells: Vec<&str> = row.split(',').collect();
+            let [_, period, end, apex] = cells[..] else {
+                return Err(format!("`{row}` has not 4 columns"));
+            };
+            p.period = match period {
+                "" => None,
+                q => Some(q.parse().map_err(|_| format!("bad period `{q}`"))?),
+            };
+            p.end = *ENDS
+                .iter()
+                .find(|e| end_name(**e) == end)
+                .ok_or_else(|| format!("unknown end `{end}`"))?;
+            if p.end != End::Diverged {
+                p.apexes
+                    .push(apex.parse().map_err(|_| format!("bad apex `{apex}`"))?);
+            }
+        }
+        Ok(p)
+    }
 }
 
 impl SweepReport<LineSystem> for LineSweepReport {
@@ -157,6 +203,10 @@ impl SweepReport<LineSystem> for LineSweepReport {
     }
 
     fn add(&mut self, x: f64, _: Option<f64>, p: LatePoint) {
+        // a diverged run is plotted as its CSV shows it: without apexes
+        if p.end == End::Diverged {
+            return;
+        }
         for a in p.apexes.into_iter().filter(|a| a.is_finite()) {
             self.points.push((x, a));
         }

@@ -47,6 +47,26 @@ fn swept_value(key: &str, v: f64) -> toml::Value {
     }
 }
 
+/// Every run end, for reading a name back.
+const RUN_ENDS: [RunEnd; 8] = [
+    RunEnd::Completed,
+    RunEnd::TippedOver,
+    RunEnd::NoSeparation,
+    RunEnd::NoContact,
+    RunEnd::SearchCap,
+    RunEnd::Jam,
+    RunEnd::NonFinite,
+    RunEnd::TimeLimit,
+];
+
+/// A run end's name in the CSV (its JSON name).
+fn end_name(e: RunEnd) -> String {
+    serde_json::to_value(e)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default()
+}
+
 fn class_letter(c: CellClass) -> char {
     match c {
         CellClass::Converges => 'C',
@@ -127,6 +147,42 @@ impl Sweeps for PlanarSystem {
         })
     }
 
+    const SHARDS: bool = true;
+
+    fn cost(key: &str, value: f64) -> f64 {
+        match key {
+            "planar.impacts" => value,
+            _ => 1.0,
+        }
+    }
+
+    /// The one row `KEY[,KEY2],class,impacts,end,max_abs_theta_rad,late_mean_energy_jpkg`.
+    fn read_point(_: f64, y: Option<f64>, rows: &[String]) -> Result<SweepCell, String> {
+        let [row] = rows else {
+            return Err(format!("{} rows for one cell", rows.len()));
+        };
+        let cells: Vec<&str> = row.split(',').skip(1 + usize::from(y.is_some())).collect();
+        let [class, impacts, end, theta, energy] = cells[..] else {
+            return Err(format!("`{row}` has not the planar sweep's columns"));
+        };
+        let num = |s: &str| s.parse::<f64>().map_err(|_| format!("bad number `{s}`"));
+        Ok(SweepCell {
+            class: *CLASSES
+                .iter()
+                .find(|c| class_name(**c) == class)
+                .ok_or_else(|| format!("unknown class `{class}`"))?,
+            impacts: impacts
+                .parse()
+                .map_err(|_| format!("bad impacts `{impacts}`"))?,
+            end: *RUN_ENDS
+                .iter()
+                .find(|e| end_name(**e) == end)
+                .ok_or_else(|| format!("unknown end `{end}`"))?,
+            max_abs_theta_rad: num(theta)?,
+            late_mean_energy_jpkg: num(energy)?,
+        })
+    }
+
     fn report(base: &SweepBase<Self>) -> PlanarSweepReport {
         PlanarSweepReport {
             name: base.file.stem.clone(),
@@ -164,10 +220,7 @@ impl SweepReport<PlanarSystem> for PlanarSweepReport {
         if let Some(y) = y {
             write!(w, ",{}", Sig17(y))?;
         }
-        let end = serde_json::to_value(c.end)
-            .ok()
-            .and_then(|v| v.as_str().map(str::to_string))
-            .unwrap_or_default();
+        let end = end_name(c.end);
         writeln!(
             w,
             ",{},{},{end},{},{}",
