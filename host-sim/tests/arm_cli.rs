@@ -254,6 +254,58 @@ fn the_nine_knot_roll_winds_up_then_lands_a_quarter_turn_on() {
     assert_eq!(last.phase, "grasp");
 }
 
+/// The roll's end is a one-sided impact: the thin frame (side a = 0.1 m, rho = 0.0577 m)
+/// cannot be stopped outright (the stop's centre of pressure would be `2 rho^2 / a`
+/// beyond the striking vertex), so it rocks onto the striking vertex at
+/// `rho^2 / (rho^2 + a^2/2)` of its rate, with an impulse needing friction
+/// `(1 - k) / (1 + k)` (tests/arm_impact.rs derives both), and rocks back and forth on
+/// its new edge until it settles. Every impulse pushes, acts on the edge and lies inside
+/// the cone of `mu_required`.
+#[test]
+fn the_roll_ends_with_a_one_sided_impact_and_the_rocks_are_reported() {
+    let r = run("arm-roll");
+    let (a, rho2) = (0.1, 0.0577f64.powi(2));
+    let k = rho2 / (rho2 + a * a / 2.0);
+    let mu = f(&r.json["mu_required"]);
+    let impacts = r.json["impacts"].as_array().expect("impacts");
+    assert!(impacts.len() >= 2, "the frame rocks: {impacts:?}");
+    let first = &impacts[0];
+    assert_eq!(first["outcome"], "rock");
+    let end = event(r, "roll_end").unwrap().t;
+    assert!((f(&first["t_s"]) - end).abs() < 1e-12);
+    assert!((f(&first["rate_after_radps"]) / f(&first["rate_before_radps"]) - k).abs() < 1e-9);
+    assert!((f(&first["stop_cop_m"]) + 2.0 * rho2 / a).abs() < 1e-9);
+    assert!(f(&first["speed_mps"]) > 0.3, "a real impact: {first}");
+    for i in impacts {
+        let (cop, l) = (f(&i["cop_m"]), f(&i["edge_length_m"]));
+        assert!(
+            (0.0..=l).contains(&cop),
+            "centre of pressure off the edge: {i}"
+        );
+        assert!(f(&i["cop_margin_m"]) >= 0.0, "{i}");
+        let (pn, pt) = (f(&i["impulse_normal_mps"]), f(&i["impulse_tangential_mps"]));
+        assert!(pn > 0.0, "pulls: {i}");
+        assert!((pt.abs() / pn - (1.0 - k) / (1.0 + k)).abs() < 1e-9, "{i}");
+        assert!(pt.abs() <= mu * pn, "outside the cone of mu_required: {i}");
+    }
+    // each rock is slower than the one before, by the same factor, and it settles
+    let rates: Vec<f64> = impacts
+        .iter()
+        .map(|i| f(&i["rate_before_radps"]).abs())
+        .collect();
+    for w in rates.windows(2) {
+        assert!((w[1] / w[0] - k).abs() < 1e-6, "{rates:?}");
+    }
+    assert_eq!(impacts.last().unwrap()["outcome"], "grasp");
+    let rocks = r.json["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"].as_str().unwrap().starts_with("rock_"))
+        .count();
+    assert_eq!(rocks, impacts.len() - 1);
+}
+
 #[test]
 fn the_rolling_throw_rolls_clockwise_and_is_released_mid_roll() {
     let r = run("arm-rolling-throw");

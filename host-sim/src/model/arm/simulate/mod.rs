@@ -20,6 +20,7 @@ pub mod step;
 
 use super::contact::{BodyState, Joint, Placement};
 use super::geometry::V2;
+use super::impact::EdgeImpact;
 use super::motion::ArmMotion;
 use super::task::Phase;
 use super::ArmScene;
@@ -51,8 +52,9 @@ pub enum Executed {
 pub struct Event {
     /// When, s.
     pub t_s: f64,
-    /// What: `roll_start_ccw`, `roll_start_cw`, `roll_end`, `roll_back`, `release`,
-    /// `slip`, `separation`, `landing`, `arm_strike`, `table`.
+    /// What: `roll_start_ccw`, `roll_start_cw`, `roll_end`, `roll_back`, `rock_ccw`,
+    /// `rock_cw` (an impact rocked the object onto its striking vertex), `release`,
+    /// `slip`, `impact_slip`, `separation`, `landing`, `arm_strike`, `table`.
     pub kind: &'static str,
 }
 
@@ -112,6 +114,19 @@ pub struct Execution {
     pub impact_speed_mps: Option<f64>,
     /// The object's state at a throw's release.
     pub release: Option<BodyState>,
+    /// Every impact of an edge on the surface, in time order.
+    pub impacts: Vec<ImpactRecord>,
+}
+
+/// One impact of the run.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ImpactRecord {
+    /// When, s.
+    pub t_s: f64,
+    /// The edge that struck.
+    pub edge: usize,
+    /// The law's result and impulse.
+    pub impact: EdgeImpact,
 }
 
 /// Integration step and recording of a run.
@@ -244,6 +259,7 @@ impl<'a> Runner<'a> {
                 goal_error: None,
                 impact_speed_mps: None,
                 release: None,
+                impacts: Vec::new(),
             },
             next_frame: 0.0,
             next_friction: 0.0,

@@ -2,11 +2,12 @@
 
 use super::step::{self, GraspEvent, RollEvent};
 use super::{
-    Executed, Frame, FrictionSample, GoalError, Runner, Sample, State, FRAME_S, FRICTION_S,
-    SAMPLE_S,
+    Executed, Frame, FrictionSample, GoalError, ImpactRecord, Runner, Sample, State, FRAME_S,
+    FRICTION_S, SAMPLE_S,
 };
 use crate::model::arm::contact::{BodyState, Pivot, Placement};
 use crate::model::arm::geometry::wrap_pi;
+use crate::model::arm::impact::{Outcome, SETTLE_SPEED_MPS};
 use crate::model::arm::task::Phase;
 
 /// How far below the table top the arm may carry the object before the table takes it
@@ -70,12 +71,15 @@ impl Runner<'_> {
             None => {}
             Some(RollEvent::Lands) => {
                 self.event(te, "roll_end");
-                self.out.impact_speed_mps = Some(rig.impact_speed_mps(&pv, s.1));
-                self.state = State::Grasp(rig.landed(&pv));
+                let onto = rig.landed(&pv);
+                if self.out.impact_speed_mps.is_none() {
+                    self.out.impact_speed_mps = Some(rig.impact_speed_mps(&pv, s.1));
+                }
+                self.strike(te, &pv, onto, s.1);
             }
             Some(RollEvent::FallsBack) => {
                 self.event(te, "roll_back");
-                self.state = State::Grasp(from);
+                self.strike(te, &pv, from, s.1);
             }
             Some(RollEvent::Slips) => {
                 self.event(te, "slip");
@@ -94,6 +98,47 @@ impl Runner<'_> {
                 Executed::Missed,
                 "the roll chattered (too many events)".into(),
             );
+        }
+    }
+
+    /// Edge `onto` strikes the surface, ending a roll over `pv` at relative rate
+    /// `psi_dot`: the one-sided impact ([`crate::model::arm::impact`]) grasps the object
+    /// on it or rocks it onto the striking vertex; an impulse outside its friction cone
+    /// is a slip.
+    fn strike(&mut self, te: f64, pv: &Pivot, onto: Placement, psi_dot: f64) {
+        let rig = &self.sys.rig;
+        let imp = rig.roll_impact(pv, &onto, psi_dot);
+        self.out.impacts.push(ImpactRecord {
+            t_s: te,
+            edge: onto.edge,
+            impact: imp,
+        });
+        if imp.judged(self.mu).is_err() {
+            self.event(te, "impact_slip");
+            self.fail(
+                Executed::Slipped,
+                format!(
+                    "the impact at t = {te:.4} s slipped: its impulse needs friction {:.4}",
+                    imp.friction_ratio()
+                ),
+            );
+            return;
+        }
+        if imp.speed_mps >= SETTLE_SPEED_MPS {
+            self.out.peak_friction_ratio = self.out.peak_friction_ratio.max(imp.friction_ratio());
+        }
+        match imp.outcome {
+            Outcome::Grasp => self.state = State::Grasp(onto),
+            Outcome::Rock {
+                dir, rate_radps, ..
+            } => {
+                self.event(te, if dir > 0.0 { "rock_ccw" } else { "rock_cw" });
+                self.state = State::Roll {
+                    pivot: rig.pivot(&onto, dir),
+                    from: onto,
+                    psi: (0.0, rate_radps),
+                };
+            }
         }
     }
 
