@@ -288,13 +288,18 @@ fn the_roll_ends_with_a_one_sided_impact_and_the_rocks_are_reported() {
         assert!((pt.abs() / pn - (1.0 - k) / (1.0 + k)).abs() < 1e-9, "{i}");
         assert!(pt.abs() <= mu * pn, "outside the cone of mu_required: {i}");
     }
-    // each rock is slower than the one before, by the same factor, and it settles
+    // every rock leaves at k of the rate it came in at, each comes in slower than the one
+    // before (the arm may still be moving: the rock in between is not exactly reversible)
+    for i in impacts.iter().filter(|i| i["outcome"] == "rock") {
+        let ratio = f(&i["rate_after_radps"]) / f(&i["rate_before_radps"]);
+        assert!((ratio - k).abs() < 1e-9, "{i}");
+    }
     let rates: Vec<f64> = impacts
         .iter()
         .map(|i| f(&i["rate_before_radps"]).abs())
         .collect();
     for w in rates.windows(2) {
-        assert!((w[1] / w[0] - k).abs() < 1e-6, "{rates:?}");
+        assert!(w[1] < w[0], "{rates:?}");
     }
     assert_eq!(impacts.last().unwrap()["outcome"], "grasp");
     let rocks = r.json["events"]
@@ -304,6 +309,35 @@ fn the_roll_ends_with_a_one_sided_impact_and_the_rocks_are_reported() {
         .filter(|e| e["kind"].as_str().unwrap().starts_with("rock_"))
         .count();
     assert_eq!(rocks, impacts.len() - 1);
+}
+
+/// With the planner's centre-of-pressure margin (`planner.cop_margin`, default 0.02 of
+/// the edge) the rolling throw executes exactly its planned phases, grasp, roll, flight;
+/// with no margin its plan grazes the vertex, tips early, falls back and tips again
+/// (grgrf), and the verifier calls that `missed` although it lands on the goal.
+#[test]
+fn the_rolling_throw_executes_exactly_its_planned_phases_with_the_cop_margin() {
+    let r = run("arm-rolling-throw");
+    assert_eq!(r.json["phases"], "grf");
+    assert_eq!(r.json["executed_phases"], "grf");
+    assert_eq!(r.json["executed"], "ok");
+    let kinds: Vec<&str> = r.json["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["roll_start_cw", "release", "landing"]);
+    let out = ok(&[
+        "run",
+        &scene("arm-rolling-throw"),
+        "--json",
+        "--set",
+        "planner.cop_margin=0",
+    ]);
+    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_ne!(j["executed_phases"], "grf", "{j}");
+    assert_eq!(j["executed"], "missed", "{}", j["reason"]);
 }
 
 #[test]
@@ -407,6 +441,7 @@ fn bad_scenes_exit_2_naming_the_dotted_key() {
         ("task.hold_s=100.0", "`task.hold_s`"),
         ("arm.brake_accel_radps2=0.5", "`arm.brake_accel_radps2`"),
         ("planner.accel_margin=1.0", "`planner.accel_margin`"),
+        ("planner.cop_margin=0.5", "`planner.cop_margin`"),
         ("task.kind=\"juggle\"", "task.kind"),
     ] {
         let (code, err) = fails("arm-throw", &["--set", set]);

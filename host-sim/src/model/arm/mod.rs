@@ -157,6 +157,8 @@ pub struct PlannerSettings {
     pub normal_force_min_mps2: f64,
     /// Initial guesses tried.
     pub starts: usize,
+    /// Centre-of-pressure margin inside a grasped edge, as a fraction of its length.
+    pub cop_margin: f64,
     /// Largest joint acceleration the plan may ask for, rad/s^2: the tracker's limit
     /// `tracking.accel_max_radps2` less the `planner.accel_margin` left to its feedback.
     pub accel_max_radps2: f64,

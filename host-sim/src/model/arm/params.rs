@@ -240,6 +240,11 @@ pub struct PlannerTable {
     /// planned joint acceleration stays within `(1 - accel_margin) accel_max`, so the
     /// controller can follow it without saturating (0.1; 0 ..= 0.9).
     pub accel_margin: f64,
+    /// `cop_margin`: the grasp's centre of pressure stays this fraction of the edge's
+    /// length inside the edge at every sample of a grasp (its end before a roll
+    /// excepted, where it must reach the vertex), so that the executed contact modes are
+    /// the planned ones: no early tip that falls back between samples (0.02; 0 ..= 0.4).
+    pub cop_margin: f64,
 }
 
 impl Default for PlannerTable {
@@ -257,6 +262,7 @@ impl Default for PlannerTable {
             normal_force_min_mps2: 0.5,
             starts: 3,
             accel_margin: 0.1,
+            cop_margin: 0.02,
         }
     }
 }
@@ -537,6 +543,7 @@ impl PlannerTable {
                 self.normal_force_min_mps2,
             )?,
             starts: count(self.starts, 1, 8, "planner.starts")?,
+            cop_margin: within("planner.cop_margin", self.cop_margin, 0.0, 0.4)?,
             // set from the tracker's limit once that is validated
             accel_max_radps2: f64::INFINITY,
         })

@@ -91,6 +91,8 @@ pub struct ArmSummary {
     pub goal_error: Option<GoalError>,
     /// The verdict of the planned trajectory at `mu_required`.
     pub executed: Executed,
+    /// The phase letters the verified run went through (`ok` only if they are `phases`).
+    pub executed_phases: String,
     /// Why.
     pub reason: String,
     /// The same trajectory at 0.95 `mu_required`.
@@ -261,6 +263,7 @@ fn summarize(
         planner_status: p.status.clone(),
         goal_error: ok.goal_error,
         executed: ok.executed,
+        executed_phases: ok.phases.clone(),
         reason: ok.reason,
         mu_margin_check: MarginCheck {
             mu: low.mu,

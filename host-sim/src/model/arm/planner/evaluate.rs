@@ -9,7 +9,7 @@
 //! | joint torque (3) | at every phase sample, arm + object reaction |
 //! | torque derivative (4) | between consecutive samples of one phase |
 //! | initial state (5) | by construction ([`super::layout`]) |
-//! | dynamic grasp (object 1) | friction cone, unilateral, centre of pressure on the edge |
+//! | dynamic grasp (object 1) | friction cone, unilateral, centre of pressure on the edge and `planner.cop_margin` of its length inside it |
 //! | rolling friction (2) | friction cone and unilateral at every RK4 node of the roll |
 //! | roll angle (3) | `0 <= dir psi <= gamma` at every RK4 node |
 //! | roll completed (4) | `dir psi(t_g1 + t_roll) = gamma` (within 1e-3 rad) |
@@ -336,7 +336,8 @@ impl<'a> Problem<'a> {
                 sink,
             );
             let l = g.edge_length_m;
-            sink.within(Kind::CentreOfPressure, g.cop_m, 0.0, l, l);
+            let inset = self.sys.planner.cop_margin * l;
+            sink.within(Kind::CentreOfPressure, g.cop_m, inset, l - inset, l);
             let tau = self.sys.arm.torque_nm(&j) + self.load(g.com, g.force_world, j.accel_radps2);
             self.torque(t, tau, sink, &mut tq);
             if let Some(tr) = sink.trace.as_mut() {

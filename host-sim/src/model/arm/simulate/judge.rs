@@ -58,15 +58,101 @@ impl Runner<'_> {
     }
 
     pub(super) fn finish(mut self) -> Execution {
-        let (how, why) = self
+        let (mut how, mut why) = self
             .verdict
             .take()
             .unwrap_or((Executed::Missed, "no verdict".into()));
+        self.out.phases = executed_phases(&self.out.events);
+        let planned = self.sys.task.kind.letters();
+        if how == Executed::Ok && self.out.phases != planned {
+            how = Executed::Missed;
+            why = format!(
+                "{why}, but through the phases {} instead of the planned {planned}",
+                self.out.phases
+            );
+        }
         self.out.executed = how;
         self.out.reason = why;
         // the last frame shows where the run ended
         self.next_frame = self.t;
         self.record();
         self.out
+    }
+}
+
+/// The phase letters a run went through, from its events: `g` at the start, `r` at each
+/// roll's start, `g` at a roll's end or fall back, `f` at the release. Rocks after an
+/// impact (a `rock_*` event and the roll back that ends it) belong to the impact that
+/// settles the object on its edge: they add no phase.
+pub fn executed_phases(events: &[super::Event]) -> String {
+    let mut letters = String::from("g");
+    let mut rocking = false;
+    for e in events {
+        let letter = match e.kind {
+            "rock_ccw" | "rock_cw" => {
+                rocking = true;
+                None
+            }
+            "roll_back" if rocking => None,
+            "roll_start_ccw" | "roll_start_cw" => Some('r'),
+            "roll_end" if rocking => {
+                letters.push('r');
+                Some('g')
+            }
+            "roll_end" | "roll_back" => Some('g'),
+            "release" => Some('f'),
+            _ => continue,
+        };
+        if let Some(c) = letter {
+            rocking = false;
+            if !letters.ends_with(c) {
+                letters.push(c);
+            }
+        }
+    }
+    letters
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Event;
+    use super::executed_phases;
+
+    fn at(kinds: &[&'static str]) -> Vec<Event> {
+        kinds
+            .iter()
+            .enumerate()
+            .map(|(i, &kind)| Event {
+                t_s: i as f64,
+                kind,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn phase_letters_follow_the_events_and_rocks_add_none() {
+        assert_eq!(executed_phases(&[]), "g");
+        assert_eq!(executed_phases(&at(&["release", "landing"])), "gf");
+        assert_eq!(
+            executed_phases(&at(&[
+                "roll_start_cw",
+                "roll_back",
+                "roll_start_cw",
+                "release"
+            ])),
+            "grgrf"
+        );
+        let rocks = [
+            "roll_start_ccw",
+            "roll_end",
+            "rock_ccw",
+            "roll_back",
+            "rock_cw",
+            "roll_back",
+        ];
+        assert_eq!(executed_phases(&at(&rocks)), "grg");
+        // a rock that rolls on over its vertex is a second roll
+        let over = ["roll_start_ccw", "roll_end", "rock_ccw", "roll_end"];
+        assert_eq!(executed_phases(&at(&over)), "grgrg");
     }
 }

@@ -116,6 +116,9 @@ pub struct Execution {
     pub release: Option<BodyState>,
     /// Every impact of an edge on the surface, in time order.
     pub impacts: Vec<ImpactRecord>,
+    /// The phase letters the run went through ([`judge::executed_phases`]): a run that
+    /// reaches its goal through other phases than the task's is `missed`.
+    pub phases: String,
 }
 
 /// One impact of the run.
@@ -260,6 +263,7 @@ impl<'a> Runner<'a> {
                 impact_speed_mps: None,
                 release: None,
                 impacts: Vec::new(),
+                phases: String::new(),
             },
             next_frame: 0.0,
             next_friction: 0.0,
@@ -317,5 +321,5 @@ impl<'a> Runner<'a> {
     }
 }
 
-mod judge;
+pub mod judge;
 mod phases;
