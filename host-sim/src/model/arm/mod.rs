@@ -10,7 +10,7 @@
 //! | [`geometry`] | plane vectors, the convex polygon, the arm's surfaces |
 //! | [`contact`] | grasp and roll forces, phase conditions, flight, the arm's torque (derived) |
 //! | [`impact`] | one-sided plastic impacts: an edge landing stops or rocks onto its striking vertex |
-//! | [`task`] | the four tasks as phase sequences (g, gf, grg, grf) and their goals |
+//! | [`task`] | the tasks as phase sequences (g, gf, grg, grf, gf + catch) and their goals |
 //! | [`params`] | the scene's tables, validation naming the dotted key |
 //! | [`motion`] | joint motions: the planned spline with its release brake |
 //! | [`planner`] | design vector, sec. 2.2 constraints, shooting seeds, SLSQP / ALM |

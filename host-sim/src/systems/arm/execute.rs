@@ -122,6 +122,10 @@ pub struct ArmSummary {
     /// outcome (`grasp` or a `rock`), its impulse, the impulse's centre of pressure with its
     /// margin to the edge's ends, and the friction it needs.
     pub impacts: Vec<ImpactSummary>,
+    /// A throw and catch's catch: its impact, how far from flat the edge came down, and
+    /// whether it was feasible (stopped outright on the edge, the impulse inside the
+    /// friction cone of `mu_required`, the grasp after it held to the end).
+    pub catch: Option<CatchSummary>,
     /// The plan tracked by the core's controller (SIL), if asked for.
     pub tracked: Option<TrackingReport>,
 }
@@ -155,6 +159,18 @@ pub struct ImpactSummary {
     pub rate_before_radps: f64,
     /// See `rate_before_radps`.
     pub rate_after_radps: f64,
+}
+
+/// The catch of a throw and catch, for the JSON.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CatchSummary {
+    /// Stopped outright on the edge, inside the cone, and held (`executed` is `ok`).
+    pub feasible: bool,
+    /// Angle between the caught edge and the surface when it came down, rad.
+    pub flat_error_rad: f64,
+    /// The catch's impact.
+    #[serde(flatten)]
+    pub impact: ImpactSummary,
 }
 
 impl From<&ImpactRecord> for ImpactSummary {
@@ -283,6 +299,14 @@ fn summarize(
         arm_outline: arm_outline(sys),
         events: ok.events,
         impacts: ok.impacts.iter().map(ImpactSummary::from).collect(),
+        catch: ok
+            .catch_index
+            .and_then(|i| ok.impacts.get(i))
+            .map(|r| CatchSummary {
+                feasible: ok.executed == Executed::Ok && r.impact.outcome == Outcome::Grasp,
+                flat_error_rad: ok.catch_flat_error_rad.unwrap_or(f64::NAN),
+                impact: ImpactSummary::from(r),
+            }),
         tracked,
     }
 }

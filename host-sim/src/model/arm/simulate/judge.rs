@@ -8,6 +8,10 @@ impl Runner<'_> {
     /// A task ending at rest must end grasped on the right edge.
     pub(super) fn judge_at_rest(&mut self) {
         let sys = self.sys;
+        if sys.task.kind.catches() {
+            self.judge_caught();
+            return;
+        }
         if sys.task.kind.throws() {
             self.fail(
                 Executed::Missed,
@@ -57,13 +61,59 @@ impl Runner<'_> {
         }
     }
 
+    /// A throw and catch must end at rest on the catching edge.
+    fn judge_caught(&mut self) {
+        let Some(c) = self.sys.task.catch else {
+            return;
+        };
+        if self.out.catch_index.is_none() {
+            self.fail(
+                Executed::Missed,
+                "the object never came down onto the arm".into(),
+            );
+            return;
+        }
+        let State::Grasp(p) = self.state else {
+            self.fail(
+                Executed::Missed,
+                "the caught object was still moving at the end".into(),
+            );
+            return;
+        };
+        let rig = &self.sys.rig;
+        let j_end = self.arm.joint(self.t);
+        let got = rig.grasped_state(&p, &j_end);
+        let goal = rig.grasped_state(
+            &c.place,
+            &crate::model::arm::contact::Joint {
+                angle_rad: c.angle_rad,
+                ..Default::default()
+            },
+        );
+        self.out.goal_error = Some(GoalError {
+            position_m: got.com.minus(goal.com).norm(),
+            angle_rad: wrap_pi(got.angle_rad - goal.angle_rad),
+        });
+        if p.edge == c.place.edge {
+            self.verdict = Some((
+                Executed::Ok,
+                format!("caught on edge {} and held at rest", p.edge),
+            ));
+        } else {
+            self.fail(
+                Executed::Missed,
+                format!("caught on edge {} instead of edge {}", p.edge, c.place.edge),
+            );
+        }
+    }
+
     pub(super) fn finish(mut self) -> Execution {
         let (mut how, mut why) = self
             .verdict
             .take()
             .unwrap_or((Executed::Missed, "no verdict".into()));
         self.out.phases = executed_phases(&self.out.events);
-        let planned = self.sys.task.kind.letters();
+        let planned = self.sys.task.kind.executed_letters();
         if how == Executed::Ok && self.out.phases != planned {
             how = Executed::Missed;
             why = format!(
@@ -99,7 +149,7 @@ pub fn executed_phases(events: &[super::Event]) -> String {
                 letters.push('r');
                 Some('g')
             }
-            "roll_end" | "roll_back" => Some('g'),
+            "roll_end" | "roll_back" | "catch" => Some('g'),
             "release" => Some('f'),
             _ => continue,
         };

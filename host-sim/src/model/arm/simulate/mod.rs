@@ -116,6 +116,10 @@ pub struct Execution {
     pub release: Option<BodyState>,
     /// Every impact of an edge on the surface, in time order.
     pub impacts: Vec<ImpactRecord>,
+    /// Which of `impacts` is the catch (a throw and catch).
+    pub catch_index: Option<usize>,
+    /// How far from flat the caught edge met the surface, rad.
+    pub catch_flat_error_rad: Option<f64>,
     /// The phase letters the run went through ([`judge::executed_phases`]): a run that
     /// reaches its goal through other phases than the task's is `missed`.
     pub phases: String,
@@ -231,6 +235,8 @@ struct Runner<'a> {
     opt: SimOptions,
     observe: Option<&'a mut dyn FnMut(&Sample)>,
     next_sample: f64,
+    /// The end of a caught run: the catch and the hold after it, s.
+    deadline: Option<f64>,
 }
 
 impl<'a> Runner<'a> {
@@ -264,6 +270,8 @@ impl<'a> Runner<'a> {
                 release: None,
                 impacts: Vec::new(),
                 phases: String::new(),
+                catch_index: None,
+                catch_flat_error_rad: None,
             },
             next_frame: 0.0,
             next_friction: 0.0,
@@ -273,11 +281,15 @@ impl<'a> Runner<'a> {
             opt,
             observe: None,
             next_sample: 0.0,
+            deadline: None,
         }
     }
 
     fn end_s(&self) -> f64 {
         let settle = self.arm.settled_s();
+        if let Some(d) = self.deadline {
+            return d.max(settle + self.sys.task.hold_s);
+        }
         if self.sys.task.kind.throws() {
             settle + 5.0 // flight to the goal; ended by the landing event
         } else {
@@ -304,10 +316,9 @@ impl<'a> Runner<'a> {
     }
 
     fn go(&mut self) {
-        let end = self.end_s();
         self.record();
-        while self.verdict.is_none() && self.t < end {
-            let t1 = self.step_end().min(end);
+        while self.verdict.is_none() && self.t < self.end_s() {
+            let t1 = self.step_end().min(self.end_s());
             match self.state {
                 State::Grasp(p) => self.grasp(p, t1),
                 State::Roll { pivot, from, psi } => self.roll(pivot, from, psi, t1),
