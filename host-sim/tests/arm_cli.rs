@@ -254,6 +254,92 @@ fn the_nine_knot_roll_winds_up_then_lands_a_quarter_turn_on() {
     assert_eq!(last.phase, "grasp");
 }
 
+/// The roll's end is a one-sided impact: the thin frame (side a = 0.1 m, rho = 0.0577 m)
+/// cannot be stopped outright (the stop's centre of pressure would be `2 rho^2 / a`
+/// beyond the striking vertex), so it rocks onto the striking vertex at
+/// `rho^2 / (rho^2 + a^2/2)` of its rate, with an impulse needing friction
+/// `(1 - k) / (1 + k)` (tests/arm_impact.rs derives both), and rocks back and forth on
+/// its new edge until it settles. Every impulse pushes, acts on the edge and lies inside
+/// the cone of `mu_required`.
+#[test]
+fn the_roll_ends_with_a_one_sided_impact_and_the_rocks_are_reported() {
+    let r = run("arm-roll");
+    let (a, rho2) = (0.1, 0.0577f64.powi(2));
+    let k = rho2 / (rho2 + a * a / 2.0);
+    let mu = f(&r.json["mu_required"]);
+    let impacts = r.json["impacts"].as_array().expect("impacts");
+    assert!(impacts.len() >= 2, "the frame rocks: {impacts:?}");
+    let first = &impacts[0];
+    assert_eq!(first["outcome"], "rock");
+    let end = event(r, "roll_end").unwrap().t;
+    assert!((f(&first["t_s"]) - end).abs() < 1e-12);
+    assert!((f(&first["rate_after_radps"]) / f(&first["rate_before_radps"]) - k).abs() < 1e-9);
+    assert!((f(&first["stop_cop_m"]) + 2.0 * rho2 / a).abs() < 1e-9);
+    assert!(f(&first["speed_mps"]) > 0.3, "a real impact: {first}");
+    for i in impacts {
+        let (cop, l) = (f(&i["cop_m"]), f(&i["edge_length_m"]));
+        assert!(
+            (0.0..=l).contains(&cop),
+            "centre of pressure off the edge: {i}"
+        );
+        assert!(f(&i["cop_margin_m"]) >= 0.0, "{i}");
+        let (pn, pt) = (f(&i["impulse_normal_mps"]), f(&i["impulse_tangential_mps"]));
+        assert!(pn > 0.0, "pulls: {i}");
+        assert!((pt.abs() / pn - (1.0 - k) / (1.0 + k)).abs() < 1e-9, "{i}");
+        assert!(pt.abs() <= mu * pn, "outside the cone of mu_required: {i}");
+    }
+    // every rock leaves at k of the rate it came in at, each comes in slower than the one
+    // before (the arm may still be moving: the rock in between is not exactly reversible)
+    for i in impacts.iter().filter(|i| i["outcome"] == "rock") {
+        let ratio = f(&i["rate_after_radps"]) / f(&i["rate_before_radps"]);
+        assert!((ratio - k).abs() < 1e-9, "{i}");
+    }
+    let rates: Vec<f64> = impacts
+        .iter()
+        .map(|i| f(&i["rate_before_radps"]).abs())
+        .collect();
+    for w in rates.windows(2) {
+        assert!(w[1] < w[0], "{rates:?}");
+    }
+    assert_eq!(impacts.last().unwrap()["outcome"], "grasp");
+    let rocks = r.json["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"].as_str().unwrap().starts_with("rock_"))
+        .count();
+    assert_eq!(rocks, impacts.len() - 1);
+}
+
+/// With the planner's centre-of-pressure margin (`planner.cop_margin`, default 0.02 of
+/// the edge) the rolling throw executes exactly its planned phases, grasp, roll, flight;
+/// with no margin its plan grazes the vertex, tips early, falls back and tips again
+/// (grgrf), and the verifier calls that `missed` although it lands on the goal.
+#[test]
+fn the_rolling_throw_executes_exactly_its_planned_phases_with_the_cop_margin() {
+    let r = run("arm-rolling-throw");
+    assert_eq!(r.json["phases"], "grf");
+    assert_eq!(r.json["executed_phases"], "grf");
+    assert_eq!(r.json["executed"], "ok");
+    let kinds: Vec<&str> = r.json["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["roll_start_cw", "release", "landing"]);
+    let out = ok(&[
+        "run",
+        &scene("arm-rolling-throw"),
+        "--json",
+        "--set",
+        "planner.cop_margin=0",
+    ]);
+    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_ne!(j["executed_phases"], "grf", "{j}");
+    assert_eq!(j["executed"], "missed", "{}", j["reason"]);
+}
+
 #[test]
 fn the_rolling_throw_rolls_clockwise_and_is_released_mid_roll() {
     let r = run("arm-rolling-throw");
@@ -355,6 +441,7 @@ fn bad_scenes_exit_2_naming_the_dotted_key() {
         ("task.hold_s=100.0", "`task.hold_s`"),
         ("arm.brake_accel_radps2=0.5", "`arm.brake_accel_radps2`"),
         ("planner.accel_margin=1.0", "`planner.accel_margin`"),
+        ("planner.cop_margin=0.5", "`planner.cop_margin`"),
         ("task.kind=\"juggle\"", "task.kind"),
     ] {
         let (code, err) = fails("arm-throw", &["--set", set]);

@@ -43,10 +43,12 @@
 //! At `psi = psi' = 0` the roll equation gives `psi'' = 0` exactly when the grasp's
 //! centre of pressure sits on `v` (`s = 0` or `s = L`): the two phases meet continuously.
 //!
-//! **Roll end.** When `|psi|` reaches `gamma` the next edge strikes the surface. As the
-//! paper assumes, there is no rebound: the object takes the arm's motion at once and is in
-//! a dynamic grasp on the new edge if the grasp conditions hold there. The impact speed is
-//! the normal speed of the striking vertex, `|psi'| L_new`.
+//! **Roll end.** When `|psi|` reaches `gamma` the next edge strikes the surface (or, at
+//! `psi = 0`, the old edge falls back). The impact is one-sided and plastic
+//! ([`super::impact`]): stopped outright only where that impulse's centre of pressure lies
+//! on the edge, else the object rocks onto the striking vertex (a square always does); the
+//! impulse must lie in its friction cone. The impact speed is the normal speed of the
+//! striking vertex, `|psi'| L_new`.
 //!
 //! **Flight.** `r(t) = r_0 + v_0 t - g t^2 y^ / 2`, `phi(t) = phi_0 + omega_0 t`.
 //!

@@ -9,7 +9,8 @@
 //! | --- | --- |
 //! | [`geometry`] | plane vectors, the convex polygon, the arm's surfaces |
 //! | [`contact`] | grasp and roll forces, phase conditions, flight, the arm's torque (derived) |
-//! | [`task`] | the four tasks as phase sequences (g, gf, grg, grf) and their goals |
+//! | [`impact`] | one-sided plastic impacts: an edge landing stops or rocks onto its striking vertex |
+//! | [`task`] | the tasks as phase sequences (g, gf, grg, grf, gf + catch) and their goals |
 //! | [`params`] | the scene's tables, validation naming the dotted key |
 //! | [`motion`] | joint motions: the planned spline with its release brake |
 //! | [`planner`] | design vector, sec. 2.2 constraints, shooting seeds, SLSQP / ALM |
@@ -42,14 +43,17 @@
 //! - The snatch is `g` from a table flush with the arm's surface; the `rg` snatch (first
 //!   contact at a vertex, with the table still touching) needs a two-contact phase that
 //!   is not modelled.
-//! - The roll's end is an inelastic impact with no rebound (as the paper assumes); the
-//!   impulse's own friction cone is not checked.
+//! - The roll's end is a one-sided plastic impact ([`impact`]): the paper's "no rebound"
+//!   (stop outright) only where its impulse's centre of pressure lies on the edge, else a
+//!   rock onto the striking vertex, simulated until it settles; the impulse must lie in
+//!   its friction cone.
 //! - The planner does not keep a thrown object clear of the arm during flight; the
 //!   verifier checks it and calls a strike `missed`.
 
 pub mod closed_loop;
 pub mod contact;
 pub mod geometry;
+pub mod impact;
 pub mod motion;
 pub mod params;
 pub mod planner;
@@ -153,6 +157,8 @@ pub struct PlannerSettings {
     pub normal_force_min_mps2: f64,
     /// Initial guesses tried.
     pub starts: usize,
+    /// Centre-of-pressure margin inside a grasped edge, as a fraction of its length.
+    pub cop_margin: f64,
     /// Largest joint acceleration the plan may ask for, rad/s^2: the tracker's limit
     /// `tracking.accel_max_radps2` less the `planner.accel_margin` left to its feedback.
     pub accel_max_radps2: f64,

@@ -161,7 +161,7 @@ pub enum RollDirection {
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TaskTable {
-    /// `kind`: `"snatch"`, `"throw"`, `"roll"` or `"rolling_throw"`.
+    /// `kind`: `"snatch"`, `"throw"`, `"roll"`, `"rolling_throw"` or `"throw_catch"`.
     pub kind: TaskKind,
     /// `initial_angle_rad`: joint angle at the start, at rest, rad (0).
     #[serde(default)]
@@ -191,6 +191,18 @@ pub struct TaskTable {
     /// objective mu + w v^2, (m/s)^-2 (0: minimize mu only).
     #[serde(default)]
     pub impact_weight_s2pm2: f64,
+    /// `catch_angle_rad`, `catch_edge`, `catch_position_m`: a throw and catch's nominal
+    /// catching joint angle (rad; the release brake must stop within
+    /// `planner::evaluate::CATCH_ANGLE_TOL_RAD` of it), the edge it lands on and that
+    /// edge's midpoint along the surface (m) (required for `throw_catch`).
+    pub catch_angle_rad: Option<f64>,
+    /// See `catch_angle_rad`.
+    pub catch_edge: Option<usize>,
+    /// See `catch_angle_rad`.
+    pub catch_position_m: Option<f64>,
+    /// `catch_turns`: whole turns the object makes in flight beyond the least (0).
+    #[serde(default)]
+    pub catch_turns: i32,
     /// `hold_s`: time the verifier keeps the arm at rest after the motion, s, 0 ..= 10 (0.3).
     #[serde(default = "default_hold")]
     pub hold_s: f64,
@@ -240,6 +252,11 @@ pub struct PlannerTable {
     /// planned joint acceleration stays within `(1 - accel_margin) accel_max`, so the
     /// controller can follow it without saturating (0.1; 0 ..= 0.9).
     pub accel_margin: f64,
+    /// `cop_margin`: the grasp's centre of pressure stays this fraction of the edge's
+    /// length inside the edge at every sample of a grasp (its end before a roll
+    /// excepted, where it must reach the vertex), so that the executed contact modes are
+    /// the planned ones: no early tip that falls back between samples (0.02; 0 ..= 0.4).
+    pub cop_margin: f64,
 }
 
 impl Default for PlannerTable {
@@ -257,6 +274,7 @@ impl Default for PlannerTable {
             normal_force_min_mps2: 0.5,
             starts: 3,
             accel_margin: 0.1,
+            cop_margin: 0.02,
         }
     }
 }
@@ -298,7 +316,10 @@ impl ArmConfig {
     pub fn validate(&self) -> Result<ArmScene, ArmError> {
         let (arm, bounds, g) = self.arm.validate()?;
         let (rig, start) = self.object.validate(&self.arm, g)?;
-        let task = self.task.validate(&bounds)?;
+        let mut task = self.task.validate(&bounds)?;
+        if task.kind.catches() {
+            self.task.catch(&rig, &bounds, &mut task)?;
+        }
         let mut planner = self.planner.validate(task.kind)?;
         let tracking = self.tracking.validate(&bounds)?;
         let margin = within("planner.accel_margin", self.planner.accel_margin, 0.0, 0.9)?;
@@ -452,7 +473,7 @@ impl TaskTable {
                 return Err(ParamError::OutOfRange("task.final_angle_rad").into());
             }
         }
-        let goal = if kind.throws() {
+        let goal = if kind.throws() && !kind.catches() {
             Some(self.goal()?)
         } else {
             None
@@ -468,6 +489,7 @@ impl TaskTable {
             final_angle_rad: final_angle,
             final_angle_range_rad: (lo, hi),
             goal,
+            catch: None,
             impact_weight_s2pm2: non_negative(
                 "task.impact_weight_s2pm2",
                 self.impact_weight_s2pm2,
@@ -491,6 +513,64 @@ impl TaskTable {
                 self.goal_angle_tolerance_rad,
             )?,
         })
+    }
+}
+
+impl TaskTable {
+    /// The catch of a throw and catch, and the throw's goal: the caught pose.
+    fn catch(&self, rig: &Rig, b: &JointBounds, task: &mut Task) -> Result<(), ArmError> {
+        let need = |v: Option<f64>, key: &'static str| match v {
+            Some(x) => Ok(finite(key, x)?),
+            None => Err(relation(key, "given for a throw_catch")),
+        };
+        let angle = need(self.catch_angle_rad, "task.catch_angle_rad")?;
+        if !(b.min_angle_rad + 0.02..=b.max_angle_rad - 0.02).contains(&angle) {
+            return Err(relation(
+                "task.catch_angle_rad",
+                "within arm.min_angle_rad + 0.02 ..= arm.max_angle_rad - 0.02",
+            ));
+        }
+        let edge = self
+            .catch_edge
+            .ok_or_else(|| relation("task.catch_edge", "given for a throw_catch"))?;
+        if edge >= rig.body.len() {
+            return Err(relation("task.catch_edge", "an edge index of the object"));
+        }
+        let l = rig.body.edge_length_m(edge);
+        let sigma = need(self.catch_position_m, "task.catch_position_m")? - 0.5 * l;
+        if sigma < 0.0 || sigma + l > rig.surface.length_m {
+            return Err(relation(
+                "task.catch_position_m",
+                "the caught edge lies on the surface",
+            ));
+        }
+        if self.catch_turns.abs() > 4 {
+            return Err(relation("task.catch_turns", "-4 ..= 4"));
+        }
+        let place = Placement {
+            edge,
+            sigma_m: sigma,
+        };
+        let at = crate::model::arm::contact::Joint {
+            angle_rad: angle,
+            ..Default::default()
+        };
+        let pose = rig.grasped_state(&place, &at);
+        task.catch = Some(crate::model::arm::task::Catch {
+            angle_rad: angle,
+            place,
+        });
+        task.goal = Some(Goal {
+            x_m: pose.com.x,
+            y_m: pose.com.y,
+            angle_rad: pose.angle_rad + std::f64::consts::TAU * self.catch_turns as f64,
+            tolerance_m: positive("task.goal_tolerance_m", self.goal_tolerance_m)?,
+            angle_tolerance_rad: positive(
+                "task.goal_angle_tolerance_rad",
+                self.goal_angle_tolerance_rad,
+            )?,
+        });
+        Ok(())
     }
 }
 
@@ -537,6 +617,7 @@ impl PlannerTable {
                 self.normal_force_min_mps2,
             )?,
             starts: count(self.starts, 1, 8, "planner.starts")?,
+            cop_margin: within("planner.cop_margin", self.cop_margin, 0.0, 0.4)?,
             // set from the tracker's limit once that is validated
             accel_max_radps2: f64::INFINITY,
         })

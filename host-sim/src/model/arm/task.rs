@@ -6,7 +6,11 @@
 //!   to a goal pose;
 //! - roll `grg`: roll it over a vertex from one edge to the next and bring the arm to
 //!   rest with the object grasped on the new edge;
-//! - rolling throw `grf`: release it while it rolls.
+//! - rolling throw `grf`: release it while it rolls;
+//! - throw and catch `gf` + `g`: a throw whose goal is the object lying on an edge of the
+//!   arm at rest at the catching angle, which the release brake (sec. 2.5's maximal
+//!   deceleration) reaches before the object comes down; the catch is a one-sided
+//!   plastic impact into a dynamic grasp ([`super::impact`]).
 
 use serde::{Deserialize, Serialize};
 
@@ -45,6 +49,8 @@ pub enum TaskKind {
     Roll,
     /// `"rolling_throw"` (grf).
     RollingThrow,
+    /// `"throw_catch"` (gf, then the catch into g).
+    ThrowCatch,
 }
 
 impl TaskKind {
@@ -56,7 +62,23 @@ impl TaskKind {
             TaskKind::Throw => &[Grasp, Flight],
             TaskKind::Roll => &[Grasp, Roll, Grasp],
             TaskKind::RollingThrow => &[Grasp, Roll, Flight],
+            TaskKind::ThrowCatch => &[Grasp, Flight],
         }
+    }
+
+    /// The phase letters a run executes: the planned phases, and for a catch the grasp
+    /// after it (`"gfg"`).
+    pub fn executed_letters(self) -> String {
+        let mut l = self.letters();
+        if self == TaskKind::ThrowCatch {
+            l.push('g');
+        }
+        l
+    }
+
+    /// Whether the task catches the object it threw.
+    pub fn catches(self) -> bool {
+        self == TaskKind::ThrowCatch
     }
 
     /// The phase letters, e.g. `"grf"`.
@@ -71,10 +93,11 @@ impl TaskKind {
             TaskKind::Throw => "throw",
             TaskKind::Roll => "roll",
             TaskKind::RollingThrow => "rolling_throw",
+            TaskKind::ThrowCatch => "throw_catch",
         }
     }
 
-    /// Whether the task ends in flight (a throw) rather than at rest on the arm.
+    /// Whether the planned motion ends in flight (a throw, also one that is caught after).
     pub fn throws(self) -> bool {
         self.phases().last() == Some(&Phase::Flight)
     }
@@ -101,6 +124,16 @@ pub struct Goal {
     pub angle_tolerance_rad: f64,
 }
 
+/// Where a thrown object is caught: the arm at rest at `angle_rad`, the object's edge
+/// `place.edge` flat on the surface at `place` (the throw's goal is that pose).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Catch {
+    /// The catching joint angle, rad (the release brake's stop).
+    pub angle_rad: f64,
+    /// The edge and where it lies on the surface.
+    pub place: super::contact::Placement,
+}
+
 /// A validated task.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Task {
@@ -116,6 +149,8 @@ pub struct Task {
     pub final_angle_range_rad: (f64, f64),
     /// The throw's goal.
     pub goal: Option<Goal>,
+    /// The catch, for a throw and catch.
+    pub catch: Option<Catch>,
     /// Weight of the squared roll-end impact speed in the objective, (m/s)^-2 (0 = mu only).
     pub impact_weight_s2pm2: f64,
     /// Time the verifier keeps the arm at rest after the trajectory, s.

@@ -12,12 +12,13 @@ use crate::controller::StepController;
 use crate::model::arm::closed_loop::{sil_controller, track, TrackedMotion, TrackingReport};
 use crate::model::arm::contact::Joint;
 use crate::model::arm::geometry::V2;
+use crate::model::arm::impact::Outcome;
 use crate::model::arm::motion::ArmMotion;
 use crate::model::arm::planner::evaluate::PlanSample;
 use crate::model::arm::planner::{plan, PhaseSpan, Plan};
 use crate::model::arm::simulate::{
     execute_observed, execute_with, Event, Executed, Execution, Frame, FrictionSample, GoalError,
-    Sample, SimOptions,
+    ImpactRecord, Sample, SimOptions,
 };
 use crate::model::arm::{ArmError, ArmScene, Solver};
 use dexter_core::arm_control::ArmController;
@@ -90,6 +91,8 @@ pub struct ArmSummary {
     pub goal_error: Option<GoalError>,
     /// The verdict of the planned trajectory at `mu_required`.
     pub executed: Executed,
+    /// The phase letters the verified run went through (`ok` only if they are `phases`).
+    pub executed_phases: String,
     /// Why.
     pub reason: String,
     /// The same trajectory at 0.95 `mu_required`.
@@ -115,8 +118,83 @@ pub struct ArmSummary {
     pub arm_outline: Vec<V2>,
     /// Events of the verified run.
     pub events: Vec<Event>,
+    /// Every impact of the verified run (an edge on the surface): the one-sided law's
+    /// outcome (`grasp` or a `rock`), its impulse, the impulse's centre of pressure with its
+    /// margin to the edge's ends, and the friction it needs.
+    pub impacts: Vec<ImpactSummary>,
+    /// A throw and catch's catch: its impact, how far from flat the edge came down, and
+    /// whether it was feasible (stopped outright on the edge, the impulse inside the
+    /// friction cone of `mu_required`, the grasp after it held to the end).
+    pub catch: Option<CatchSummary>,
     /// The plan tracked by the core's controller (SIL), if asked for.
     pub tracked: Option<TrackingReport>,
+}
+
+/// One impact of the verified run, for the JSON.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ImpactSummary {
+    /// When, s.
+    pub t_s: f64,
+    /// The edge that struck.
+    pub edge: usize,
+    /// `grasp` (stopped on the edge) or `rock` (onto the striking vertex).
+    pub outcome: &'static str,
+    /// Normal speed of the striking end, m/s.
+    pub speed_mps: f64,
+    /// Impulse per unit mass along the normal, m/s.
+    pub impulse_normal_mps: f64,
+    /// Impulse per unit mass along the tangent, m/s.
+    pub impulse_tangential_mps: f64,
+    /// The impulse's centre of pressure from the edge's first vertex, m.
+    pub cop_m: f64,
+    /// Its distance from the nearer end of the edge, m (>= 0: on the edge).
+    pub cop_margin_m: f64,
+    /// Where a stop outright would need it, m (off the edge: it would have to pull).
+    pub stop_cop_m: f64,
+    /// The edge's length, m.
+    pub edge_length_m: f64,
+    /// |Pi_t| / Pi_n.
+    pub friction_ratio: f64,
+    /// Relative rate before and after, rad/s.
+    pub rate_before_radps: f64,
+    /// See `rate_before_radps`.
+    pub rate_after_radps: f64,
+}
+
+/// The catch of a throw and catch, for the JSON.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CatchSummary {
+    /// Stopped outright on the edge, inside the cone, and held (`executed` is `ok`).
+    pub feasible: bool,
+    /// Angle between the caught edge and the surface when it came down, rad.
+    pub flat_error_rad: f64,
+    /// The catch's impact.
+    #[serde(flatten)]
+    pub impact: ImpactSummary,
+}
+
+impl From<&ImpactRecord> for ImpactSummary {
+    fn from(r: &ImpactRecord) -> Self {
+        let i = &r.impact;
+        Self {
+            t_s: r.t_s,
+            edge: r.edge,
+            outcome: match i.outcome {
+                Outcome::Grasp => "grasp",
+                Outcome::Rock { .. } => "rock",
+            },
+            speed_mps: i.speed_mps,
+            impulse_normal_mps: i.impulse_normal_mps,
+            impulse_tangential_mps: i.impulse_tangential_mps,
+            cop_m: i.cop_m,
+            cop_margin_m: i.cop_margin_m(),
+            stop_cop_m: i.stop_cop_m,
+            edge_length_m: i.edge_length_m,
+            friction_ratio: i.friction_ratio(),
+            rate_before_radps: i.rate_before_radps,
+            rate_after_radps: i.rate_after_radps,
+        }
+    }
 }
 
 /// What to run besides planning and verifying.
@@ -201,6 +279,7 @@ fn summarize(
         planner_status: p.status.clone(),
         goal_error: ok.goal_error,
         executed: ok.executed,
+        executed_phases: ok.phases.clone(),
         reason: ok.reason,
         mu_margin_check: MarginCheck {
             mu: low.mu,
@@ -219,6 +298,15 @@ fn summarize(
         frames: ok.frames,
         arm_outline: arm_outline(sys),
         events: ok.events,
+        impacts: ok.impacts.iter().map(ImpactSummary::from).collect(),
+        catch: ok
+            .catch_index
+            .and_then(|i| ok.impacts.get(i))
+            .map(|r| CatchSummary {
+                feasible: ok.executed == Executed::Ok && r.impact.outcome == Outcome::Grasp,
+                flat_error_rad: ok.catch_flat_error_rad.unwrap_or(f64::NAN),
+                impact: ImpactSummary::from(r),
+            }),
         tracked,
     }
 }

@@ -2,7 +2,8 @@
 //! figs. 2-3: `-filmstrip` (the arm and the object through the verified motion, with a
 //! throw's goal), `-trajectory` (the planned joint angle with its knots at their Greville
 //! abscissae, the tracked angle, and the events) and `-friction` (the friction the
-//! verified run needs over time, the plan's own samples, mu_required and 0.95 mu).
+//! verified run needs over time, the plan's own samples, every impact's impulse ratio,
+//! mu_required and 0.95 mu).
 //!
 //! Everything drawn comes from the outcome, whose size is bounded by the run's simulated
 //! time (at most a few tens of seconds; `docs/arm.md`); rows are not kept.
@@ -158,6 +159,13 @@ fn friction(cfg: &ArmRunConfig, out: &ArmOutcome) -> Chart {
     )
     .line("verified run", verified)
     .dots("planner's samples", planned)
+    .dots(
+        "impacts: the impulse's |Pi_t| / Pi_n (roll ends, rocks, the catch)",
+        s.impacts
+            .iter()
+            .map(|i| (i.t_s, i.friction_ratio))
+            .collect(),
+    )
     .line(format!("mu_required {mu:.4}"), vec![(0.0, mu), (end, mu)])
     .line(
         format!("{MARGIN_FACTOR} mu_required (the margin check)"),

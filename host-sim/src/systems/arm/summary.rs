@@ -185,6 +185,7 @@ impl ArmOutcome {
             events.push("none (no phase change)".into());
         }
         o += &format!("  events:      {}\n", events.join(", "));
+        o += &impact_line(&s.impacts);
         o
     }
 
@@ -283,4 +284,27 @@ impl Outcome for ArmOutcome {
             sil_trajectory: self.against_sil.unwrap_or_default(),
         });
     }
+}
+
+/// The verified run's impacts in one line: how many, how many rocked, the first one's
+/// centre of pressure and friction.
+fn impact_line(impacts: &[super::execute::ImpactSummary]) -> String {
+    let Some(first) = impacts.first() else {
+        return String::new();
+    };
+    let rocks = impacts.iter().filter(|i| i.outcome == "rock").count();
+    format!(
+        "  impacts:     {} ({rocks} rocked onto the striking vertex); first at {:.4} s: {} at {:.3} m/s, centre of pressure {:.4} m on the {:.3} m edge (margin {:.4} m; a stop would need {:.4} m), friction ratio {:.4}, rate {:.3} -> {:.3} rad/s\n",
+        impacts.len(),
+        first.t_s,
+        first.outcome,
+        first.speed_mps,
+        first.cop_m,
+        first.edge_length_m,
+        first.cop_margin_m,
+        first.stop_cop_m,
+        first.friction_ratio,
+        first.rate_before_radps,
+        first.rate_after_radps
+    )
 }

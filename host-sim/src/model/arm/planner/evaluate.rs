@@ -9,11 +9,12 @@
 //! | joint torque (3) | at every phase sample, arm + object reaction |
 //! | torque derivative (4) | between consecutive samples of one phase |
 //! | initial state (5) | by construction ([`super::layout`]) |
-//! | dynamic grasp (object 1) | friction cone, unilateral, centre of pressure on the edge |
+//! | dynamic grasp (object 1) | friction cone, unilateral, centre of pressure on the edge and `planner.cop_margin` of its length inside it |
 //! | rolling friction (2) | friction cone and unilateral at every RK4 node of the roll |
 //! | roll angle (3) | `0 <= dir psi <= gamma` at every RK4 node |
 //! | roll completed (4) | `dir psi(t_g1 + t_roll) = gamma` (within 1e-3 rad) |
 //! | release state (5) | goal pose after `t_flight` within a tenth of its tolerance, falling; release separates under the brake; the brake stops within the joint limits |
+//! | catch (a throw and catch) | the brake stops within `CATCH_ANGLE_TOL_RAD` of the catching angle, at least `CATCH_LEAD_S` before the object arrives; the goal pose is the object lying on its catching edge there |
 //!
 //! The torque rate is not checked across a phase change: the roll's end is an impact and
 //! a throw's release a deliberate maximal deceleration (sec. 2.5), both jumps in torque.
@@ -26,6 +27,11 @@ use super::super::ArmScene;
 use super::layout::{Design, Layout};
 use crate::engine::ode::{Method, Rk4, State};
 use serde::Serialize;
+
+/// How far the brake's stop may be from a catch's nominal angle (`task.catch_angle_rad`), rad.
+pub const CATCH_ANGLE_TOL_RAD: f64 = 0.15;
+/// How long the arm must be at rest at the catching angle before the object arrives, s.
+pub const CATCH_LEAD_S: f64 = 0.02;
 
 /// What a constraint row constrains (for reporting the ones a plan violates).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -59,6 +65,8 @@ pub enum Kind {
     Goal,
     /// Brake stops within the joint limits.
     BrakeStop,
+    /// A catch: the brake stops at the catching angle before the object comes down.
+    Catch,
 }
 
 impl std::fmt::Display for Kind {
@@ -79,6 +87,9 @@ impl std::fmt::Display for Kind {
             Self::Release => "separation at the release",
             Self::Goal => "the goal pose",
             Self::BrakeStop => "the brake stop within the joint limits",
+            Self::Catch => {
+                "the catch (the brake's stop at the catching angle, before the object arrives)"
+            }
         })
     }
 }
@@ -336,7 +347,8 @@ impl<'a> Problem<'a> {
                 sink,
             );
             let l = g.edge_length_m;
-            sink.within(Kind::CentreOfPressure, g.cop_m, 0.0, l, l);
+            let inset = self.sys.planner.cop_margin * l;
+            sink.within(Kind::CentreOfPressure, g.cop_m, inset, l - inset, l);
             let tau = self.sys.arm.torque_nm(&j) + self.load(g.com, g.force_world, j.accel_radps2);
             self.torque(t, tau, sink, &mut tq);
             if let Some(tr) = sink.trace.as_mut() {
@@ -459,7 +471,27 @@ impl<'a> Problem<'a> {
         // in f32
         let (lo, hi) = self.layout.angle_bounds;
         sink.within(Kind::BrakeStop, stop, lo + 0.01, hi - 0.01, hi - lo);
-        if let Some(goal) = sys.task.goal {
+        let mut goal = sys.task.goal;
+        if let (Some(c), Some(g)) = (sys.task.catch, goal.as_mut()) {
+            // the release brake is the time-optimal move to rest: the catching
+            // configuration is where it stops, reached a little before the object arrives,
+            // and the goal is the object lying there on its catching edge
+            let at = Joint {
+                angle_rad: stop,
+                ..Default::default()
+            };
+            let pose = sys.rig.grasped_state(&c.place, &at);
+            let turns = ((g.angle_rad - c.angle_rad - sys.rig.alpha_rad(c.place.edge))
+                / std::f64::consts::TAU)
+                .round();
+            (g.x_m, g.y_m) = (pose.com.x, pose.com.y);
+            g.angle_rad = pose.angle_rad + std::f64::consts::TAU * turns;
+            let tol = CATCH_ANGLE_TOL_RAD;
+            sink.within(Kind::Catch, stop, c.angle_rad - tol, c.angle_rad + tol, 1.0);
+            let early = m.settled_s() - (t_rel + dur) + CATCH_LEAD_S;
+            sink.push(Kind::Catch, early / 0.1);
+        }
+        if let Some(goal) = goal {
             let f = s0.flown(dur, g);
             let tol = 0.1 * goal.tolerance_m;
             sink.within(Kind::Goal, f.com.x, goal.x_m - tol, goal.x_m + tol, tol);

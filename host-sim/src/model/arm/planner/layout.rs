@@ -167,7 +167,7 @@ impl Layout {
         let sign = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
         let windup = [0.15, 0.3, 0.0, 0.45][(k / 2) % 4];
         let swing = match kind {
-            TaskKind::Throw | TaskKind::RollingThrow => 0.8,
+            TaskKind::Throw | TaskKind::RollingThrow | TaskKind::ThrowCatch => 0.8,
             _ => 0.5,
         };
         let nf = self.free_points();

@@ -7,7 +7,7 @@
 //! the task's phases are ranked (throws by how close the flight passes the goal, then by
 //! friction) and the best become the starts.
 
-use super::super::motion::PlannedMotion;
+use super::super::motion::{ArmMotion, PlannedMotion};
 use super::super::simulate::{execute_with, Execution, SimOptions};
 use super::super::task::TaskKind;
 use super::evaluate::Problem;
@@ -138,7 +138,7 @@ fn times(problem: &Problem, e: &Execution, total_s: f64) -> Option<(Vec<f64>, f6
             let ok = e.executed == super::super::simulate::Executed::Ok && re < total_s;
             ok.then(|| (vec![rs, re - rs, total_s - re], ratio))
         }
-        TaskKind::Throw | TaskKind::RollingThrow => {
+        TaskKind::Throw | TaskKind::RollingThrow | TaskKind::ThrowCatch => {
             let rel = first(e, "release")?;
             let rolled = roll_start_before(e, rel, sys.task.roll_dir)
                 .filter(|&t| !e.events.iter().any(|x| x.kind == "roll_back" && x.t_s > t));
@@ -146,7 +146,7 @@ fn times(problem: &Problem, e: &Execution, total_s: f64) -> Option<(Vec<f64>, f6
             let (dist, tf) = closest_pass(problem, e)?;
             let score = dist / sys.task.goal?.tolerance_m + ratio;
             match (sys.task.kind, rolled) {
-                (TaskKind::Throw, None) => Some((vec![rel, tf], score)),
+                (TaskKind::Throw | TaskKind::ThrowCatch, None) => Some((vec![rel, tf], score)),
                 (TaskKind::RollingThrow, Some(rs)) if !landed_before => {
                     Some((vec![rs, rel - rs, tf], score))
                 }
@@ -194,9 +194,13 @@ pub fn seeds(problem: &Problem, count: usize) -> Vec<Vec<f64>> {
         };
         let e = execute_with(sys, &m, f64::INFINITY, opt);
 
-        let Some((ts, score)) = times(problem, &e, shape.duration_s) else {
+        let Some((ts, mut score)) = times(problem, &e, shape.duration_s) else {
             continue;
         };
+        if let Some(c) = sys.task.catch {
+            // a catch: the brake must stop at the catching angle
+            score += (m.joint(m.settled_s()).angle_rad - c.angle_rad).abs() / 0.02;
+        }
 
         // clamping a grasp or roll time would rescale the spline and change its events;
         // the flight time is the spline's business only through the goal

@@ -20,6 +20,7 @@ pub mod step;
 
 use super::contact::{BodyState, Joint, Placement};
 use super::geometry::V2;
+use super::impact::EdgeImpact;
 use super::motion::ArmMotion;
 use super::task::Phase;
 use super::ArmScene;
@@ -51,8 +52,9 @@ pub enum Executed {
 pub struct Event {
     /// When, s.
     pub t_s: f64,
-    /// What: `roll_start_ccw`, `roll_start_cw`, `roll_end`, `roll_back`, `release`,
-    /// `slip`, `separation`, `landing`, `arm_strike`, `table`.
+    /// What: `roll_start_ccw`, `roll_start_cw`, `roll_end`, `roll_back`, `rock_ccw`,
+    /// `rock_cw` (an impact rocked the object onto its striking vertex), `release`,
+    /// `slip`, `impact_slip`, `separation`, `landing`, `arm_strike`, `table`.
     pub kind: &'static str,
 }
 
@@ -112,6 +114,26 @@ pub struct Execution {
     pub impact_speed_mps: Option<f64>,
     /// The object's state at a throw's release.
     pub release: Option<BodyState>,
+    /// Every impact of an edge on the surface, in time order.
+    pub impacts: Vec<ImpactRecord>,
+    /// Which of `impacts` is the catch (a throw and catch).
+    pub catch_index: Option<usize>,
+    /// How far from flat the caught edge met the surface, rad.
+    pub catch_flat_error_rad: Option<f64>,
+    /// The phase letters the run went through ([`judge::executed_phases`]): a run that
+    /// reaches its goal through other phases than the task's is `missed`.
+    pub phases: String,
+}
+
+/// One impact of the run.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ImpactRecord {
+    /// When, s.
+    pub t_s: f64,
+    /// The edge that struck.
+    pub edge: usize,
+    /// The law's result and impulse.
+    pub impact: EdgeImpact,
 }
 
 /// Integration step and recording of a run.
@@ -213,6 +235,8 @@ struct Runner<'a> {
     opt: SimOptions,
     observe: Option<&'a mut dyn FnMut(&Sample)>,
     next_sample: f64,
+    /// The end of a caught run: the catch and the hold after it, s.
+    deadline: Option<f64>,
 }
 
 impl<'a> Runner<'a> {
@@ -244,6 +268,10 @@ impl<'a> Runner<'a> {
                 goal_error: None,
                 impact_speed_mps: None,
                 release: None,
+                impacts: Vec::new(),
+                phases: String::new(),
+                catch_index: None,
+                catch_flat_error_rad: None,
             },
             next_frame: 0.0,
             next_friction: 0.0,
@@ -253,11 +281,15 @@ impl<'a> Runner<'a> {
             opt,
             observe: None,
             next_sample: 0.0,
+            deadline: None,
         }
     }
 
     fn end_s(&self) -> f64 {
         let settle = self.arm.settled_s();
+        if let Some(d) = self.deadline {
+            return d.max(settle + self.sys.task.hold_s);
+        }
         if self.sys.task.kind.throws() {
             settle + 5.0 // flight to the goal; ended by the landing event
         } else {
@@ -284,10 +316,9 @@ impl<'a> Runner<'a> {
     }
 
     fn go(&mut self) {
-        let end = self.end_s();
         self.record();
-        while self.verdict.is_none() && self.t < end {
-            let t1 = self.step_end().min(end);
+        while self.verdict.is_none() && self.t < self.end_s() {
+            let t1 = self.step_end().min(self.end_s());
             match self.state {
                 State::Grasp(p) => self.grasp(p, t1),
                 State::Roll { pivot, from, psi } => self.roll(pivot, from, psi, t1),
@@ -301,5 +332,5 @@ impl<'a> Runner<'a> {
     }
 }
 
-mod judge;
+pub mod judge;
 mod phases;

@@ -2,16 +2,23 @@
 
 use super::step::{self, GraspEvent, RollEvent};
 use super::{
-    Executed, Frame, FrictionSample, GoalError, Runner, Sample, State, FRAME_S, FRICTION_S,
-    SAMPLE_S,
+    Executed, Frame, FrictionSample, GoalError, ImpactRecord, Runner, Sample, State, FRAME_S,
+    FRICTION_S, SAMPLE_S,
 };
+use crate::engine::locate::bisect;
 use crate::model::arm::contact::{BodyState, Pivot, Placement};
 use crate::model::arm::geometry::wrap_pi;
+use crate::model::arm::impact::{EdgeImpact, Outcome, SETTLE_SPEED_MPS};
 use crate::model::arm::task::Phase;
 
 /// How far below the table top the arm may carry the object before the table takes it
 /// back, m (a tracked arm sags by microns at the start).
 const TABLE_TOLERANCE_M: f64 = 1e-3;
+
+/// Largest angle between the caught edge and the surface at which the edge strikes as a
+/// whole, rad (the planner aims at `goal_angle_tolerance_rad / 10`); a vertex-first
+/// strike further from flat (a roll onto the edge after it) is not modelled: a miss.
+pub const FLAT_TOL_RAD: f64 = 0.02;
 
 /// Events after which a run is called chattering (a roll starting and falling back
 /// without end).
@@ -70,12 +77,15 @@ impl Runner<'_> {
             None => {}
             Some(RollEvent::Lands) => {
                 self.event(te, "roll_end");
-                self.out.impact_speed_mps = Some(rig.impact_speed_mps(&pv, s.1));
-                self.state = State::Grasp(rig.landed(&pv));
+                let onto = rig.landed(&pv);
+                if self.out.impact_speed_mps.is_none() {
+                    self.out.impact_speed_mps = Some(rig.impact_speed_mps(&pv, s.1));
+                }
+                self.strike(te, &pv, onto, s.1);
             }
             Some(RollEvent::FallsBack) => {
                 self.event(te, "roll_back");
-                self.state = State::Grasp(from);
+                self.strike(te, &pv, from, s.1);
             }
             Some(RollEvent::Slips) => {
                 self.event(te, "slip");
@@ -97,6 +107,53 @@ impl Runner<'_> {
         }
     }
 
+    /// Edge `onto` strikes the surface, ending a roll over `pv` at relative rate
+    /// `psi_dot`: the one-sided impact ([`crate::model::arm::impact`]) grasps the object
+    /// on it or rocks it onto the striking vertex; an impulse outside its friction cone
+    /// is a slip.
+    fn strike(&mut self, te: f64, pv: &Pivot, onto: Placement, psi_dot: f64) {
+        let imp = self.sys.rig.roll_impact(pv, &onto, psi_dot);
+        self.apply_impact(te, onto, imp);
+    }
+
+    /// Record an impact onto edge `onto`, judge its impulse's friction, and go on from
+    /// what it did.
+    fn apply_impact(&mut self, te: f64, onto: Placement, imp: EdgeImpact) {
+        let rig = &self.sys.rig;
+        self.out.impacts.push(ImpactRecord {
+            t_s: te,
+            edge: onto.edge,
+            impact: imp,
+        });
+        if imp.judged(self.mu).is_err() {
+            self.event(te, "impact_slip");
+            self.fail(
+                Executed::Slipped,
+                format!(
+                    "the impact at t = {te:.4} s slipped: its impulse needs friction {:.4}",
+                    imp.friction_ratio()
+                ),
+            );
+            return;
+        }
+        if imp.speed_mps >= SETTLE_SPEED_MPS {
+            self.out.peak_friction_ratio = self.out.peak_friction_ratio.max(imp.friction_ratio());
+        }
+        match imp.outcome {
+            Outcome::Grasp => self.state = State::Grasp(onto),
+            Outcome::Rock {
+                dir, rate_radps, ..
+            } => {
+                self.event(te, if dir > 0.0 { "rock_ccw" } else { "rock_cw" });
+                self.state = State::Roll {
+                    pivot: rig.pivot(&onto, dir),
+                    from: onto,
+                    psi: (0.0, rate_radps),
+                };
+            }
+        }
+    }
+
     /// The object leaves the surface: a throw's release at the brake, else a failure.
     fn leave(&mut self, te: f64, s: BodyState) {
         if self.sys.task.kind.throws() && te >= self.arm.release_s() - 1e-3 {
@@ -114,7 +171,8 @@ impl Runner<'_> {
 
     pub(super) fn flight(&mut self, t0: f64, start: BodyState, t1: f64) {
         let g = self.sys.rig.gravity_mps2;
-        if let Some(goal) = self.sys.task.goal {
+        let catches = self.sys.task.kind.catches();
+        if let Some(goal) = self.sys.task.goal.filter(|_| !catches) {
             let (y0, vy) = (start.com.y, start.velocity.y);
             let disc = vy * vy + 2.0 * g * (y0 - goal.y_m);
             if disc >= 0.0 {
@@ -151,6 +209,10 @@ impl Runner<'_> {
         }
         let s1 = start.flown(t1 - t0, g);
         if step::clearance_m(&self.sys.rig, &s1, &self.arm.joint(t1)) < -1e-6 {
+            if catches {
+                self.catch(t0, start, t1);
+                return;
+            }
             self.t = t1;
             self.event(t1, "arm_strike");
             self.fail(
@@ -160,6 +222,62 @@ impl Runner<'_> {
             return;
         }
         self.t = t1;
+    }
+
+    /// The flying object meets the surface in `(t, t1]`: located by bisection on the
+    /// clearance, then caught by the one-sided impact of the edge that is (within
+    /// [`FLAT_TOL_RAD`]) flat on the surface; a vertex-first strike is a miss.
+    fn catch(&mut self, t0: f64, start: BodyState, t1: f64) {
+        let (rig, arm) = (&self.sys.rig, self.arm);
+        let g = rig.gravity_mps2;
+        let under = |t: f64| {
+            let c = step::clearance_m(rig, &start.flown(t - t0, g), &arm.joint(t));
+            (c < 0.0).then_some(())
+        };
+        let (te, ()) = bisect((self.t, t1), (), 40, under);
+        self.t = te;
+        let s = start.flown(te - t0, g);
+        let j = arm.joint(te);
+        self.event(te, "catch");
+        let rel = s.angle_rad - j.angle_rad;
+        let body = &rig.body;
+        let (edge, off) = (0..body.len())
+            .map(|k| (k, wrap_pi(rel - rig.alpha_rad(k))))
+            .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            .unwrap_or((0, f64::INFINITY));
+        self.out.catch_flat_error_rad = Some(off);
+        if off.abs() > FLAT_TOL_RAD {
+            self.fail(
+                Executed::Missed,
+                format!("the object struck the arm on a vertex at t = {te:.4} s, {off:.4} rad from lying flat"),
+            );
+            return;
+        }
+        let v_arm = body.vertex(edge).rotate(s.angle_rad);
+        let sigma = rig.surface.sigma_m(s.com.plus(v_arm).rotate(-j.angle_rad));
+        let onto = Placement {
+            edge,
+            sigma_m: sigma,
+        };
+        if sigma < 0.0 || sigma + body.edge_length_m(edge) > rig.surface.length_m {
+            self.fail(
+                Executed::Missed,
+                format!("the object came down off the end of the surface at t = {te:.4} s"),
+            );
+            return;
+        }
+        // the twist relative to the arm, in the arm frame
+        let v = s
+            .velocity
+            .minus(s.com.perp().scale(j.velocity_radps))
+            .rotate(-j.angle_rad);
+        let w = s.angular_velocity_radps - j.velocity_radps;
+        let imp = rig.edge_impact(&onto, v, w);
+        self.out.catch_index = Some(self.out.impacts.len());
+        self.apply_impact(te, onto, imp);
+        if self.verdict.is_none() {
+            self.deadline = Some(te + self.sys.task.hold_s);
+        }
     }
 
     /// A snatch must lift the object off the table, not push it through.
