@@ -9,9 +9,10 @@ use common::{scene, scratch};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The text a terminal shows of `args` during its first `secs` seconds (then it is stopped).
-fn terminal_text(args: &[&str], secs: u64) -> String {
-    let dir = scratch("progress-tty");
+/// The text a terminal shows of `args` during its first `secs` seconds (then it is stopped);
+/// `tag` names the test's own scratch directory (tests run in parallel).
+fn terminal_text(tag: &str, args: &[&str], secs: u64) -> String {
+    let dir = scratch(&format!("progress-tty-{tag}"));
     let typescript = dir.join("typescript");
     let cmd = std::iter::once(env!("CARGO_BIN_EXE_dexter").to_string())
         .chain(args.iter().map(|a| format!("'{a}'")))
@@ -44,6 +45,7 @@ fn terminal_text(args: &[&str], secs: u64) -> String {
 fn a_stalled_sampled_hopper_shows_simulated_time_and_its_bound() {
     // a thrust too weak to hop: no cycle completes, the run goes on to its time bound
     let text = terminal_text(
+        "hopper",
         &[
             "run",
             &scene("hopper-raibert-sil"),
@@ -69,4 +71,39 @@ fn a_stalled_sampled_hopper_shows_simulated_time_and_its_bound() {
         times.len() >= 2 && times.last() > times.first(),
         "{times:?}"
     );
+}
+
+#[test]
+fn a_long_arm_plan_shows_its_starts_and_evaluations() {
+    // the slow plan, 16 knots and fine samples: seconds per start
+    let text = terminal_text(
+        "arm",
+        &[
+            "run",
+            &scene("arm-roll"),
+            "--set",
+            "planner.knots=16",
+            "--set",
+            "planner.samples_per_phase=1000",
+            "--set",
+            "planner.roll_steps=2000",
+            "--set",
+            "planner.max_evaluations=100000",
+            "--set",
+            "planner.starts=8",
+        ],
+        4,
+    );
+    assert!(text.contains(" of 8 starts, "), "{text}");
+    // the evaluations move while the first start runs
+    let counts: Vec<f64> = text
+        .split(" of 8 starts, ")
+        .skip(1)
+        .filter_map(|s| s.split(' ').next()?.parse().ok())
+        .collect();
+    assert!(
+        counts.len() >= 2 && counts.last() > counts.first(),
+        "{counts:?}"
+    );
+    assert!(text.contains("program evaluations"), "{text}");
 }

@@ -154,6 +154,8 @@ pub struct Problem<'a> {
     /// where the verifier found friction peaks between the regular samples
     /// ([`super::refine`]).
     pub extra: Vec<Vec<f64>>,
+    /// Called at every evaluation (the planning's progress bar), if set.
+    pub watch: Option<&'a dyn Fn()>,
 }
 
 /// Torque samples of one phase: (t, tau).
@@ -167,6 +169,7 @@ impl<'a> Problem<'a> {
             extra: vec![Vec::new(); layout.phases.len()],
             sys,
             layout,
+            watch: None,
         }
     }
 
@@ -181,6 +184,9 @@ impl<'a> Problem<'a> {
 
     /// Objective and constraints at `x`; with `trace`, the plan's samples too.
     pub fn evaluate(&self, x: &[f64], trace: bool) -> Eval {
+        if let Some(watch) = self.watch {
+            watch();
+        }
         let d = self.layout.decode(x);
         let m = self.motion(&d);
         let mut sink = Sink {

@@ -13,8 +13,10 @@ pub mod solve;
 use super::motion::PlannedMotion;
 use super::task::Phase;
 use super::{ArmError, ArmScene, Solver};
+use crate::progress::Progress;
 use evaluate::{Kind, PlanSample, Problem};
 use serde::Serialize;
+use std::cell::{Cell, RefCell};
 use std::time::Instant;
 
 /// Largest scaled constraint value a plan may keep and still count as feasible (a
@@ -112,10 +114,60 @@ fn worst(e: &evaluate::Eval) -> (f64, Option<Kind>) {
         })
 }
 
+/// The planning's progress on a terminal (issue 22, finding 10): the starts done of all
+/// (each start's solves capped by `planner.max_evaluations` per refinement round), and the
+/// program evaluations so far, which move while a start runs. Drawn only from the main
+/// thread: a sweep plans on rayon's workers and shows its own bar over the points.
+struct Meter {
+    bar: RefCell<Progress>,
+    starts: Cell<usize>,
+    evaluations: Cell<usize>,
+}
+
+impl Meter {
+    fn new(starts: usize) -> Self {
+        let limits = [
+            (starts as f64, "starts"),
+            (f64::INFINITY, "program evaluations"),
+        ];
+        let wanted = rayon::current_thread_index().is_none();
+        Self {
+            bar: RefCell::new(Progress::new(limits, wanted)),
+            starts: Cell::new(0),
+            evaluations: Cell::new(0),
+        }
+    }
+
+    /// One more program evaluation (the bar is redrawn every 32).
+    fn evaluated(&self) {
+        let n = self.evaluations.get() + 1;
+        self.evaluations.set(n);
+        if n % 32 == 0 {
+            self.show();
+        }
+    }
+
+    fn start_done(&self) {
+        self.starts.set(self.starts.get() + 1);
+        self.show();
+    }
+
+    fn show(&self) {
+        let values = [self.starts.get() as f64, self.evaluations.get() as f64];
+        self.bar.borrow_mut().update(values);
+    }
+}
+
 /// One start: solve, then refine the samples and solve again (at most
-/// [`refine::ROUNDS`] times). Returns the problem with its extra samples and the result.
-fn solve_start<'a>(sys: &'a ArmScene, x0: Vec<f64>) -> (Problem<'a>, solve::Solved) {
+/// [`refine::ROUNDS`] times), every evaluation reported to `watch`. Returns the problem
+/// with its extra samples and the result.
+fn solve_start<'a>(
+    sys: &'a ArmScene,
+    x0: Vec<f64>,
+    watch: &'a dyn Fn(),
+) -> (Problem<'a>, solve::Solved) {
     let mut problem = Problem::new(sys);
+    problem.watch = Some(watch);
     let bounds = problem.layout.bounds();
     let (mut x, mut it, mut ev) = (x0, 0, 0);
     let mut status = String::new();
@@ -152,10 +204,13 @@ pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
         starts.push(seeding.layout.guess(sys.task.kind, k));
     }
     let (mut iterations, mut evaluations) = (0, 0);
+    let meter = Meter::new(starts.len());
+    let watch = || meter.evaluated();
     let mut best: Option<(usize, Problem, solve::Solved, f64)> = None;
     let mut least_bad: (f64, Option<Kind>, String) = (f64::INFINITY, None, String::new());
     for (k, x0) in starts.into_iter().enumerate() {
-        let (problem, s) = solve_start(sys, x0);
+        let (problem, s) = solve_start(sys, x0, &watch);
+        meter.start_done();
         iterations += s.iterations;
         evaluations += s.evaluations;
         let e = problem.evaluate(&s.x, false);
@@ -170,9 +225,11 @@ pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
             best = Some((k, problem, s, e.objective));
         }
     }
-    let Some((start, problem, s, _)) = best else {
+    meter.bar.borrow().finish();
+    let Some((start, mut problem, s, _)) = best else {
         return Err(ArmError::NoPlan(no_plan_message(least_bad)));
     };
+    problem.watch = None;
     let e = problem.evaluate(&s.x, true);
     let d = problem.layout.decode(&s.x);
     let dense = super::simulate::execute_with(
