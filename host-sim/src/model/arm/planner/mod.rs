@@ -142,7 +142,7 @@ impl Meter {
     fn evaluated(&self) {
         let n = self.evaluations.get() + 1;
         self.evaluations.set(n);
-        if n % 32 == 0 {
+        if n.is_multiple_of(32) {
             self.show();
         }
     }
