@@ -10,43 +10,9 @@
 
 mod common;
 
-use common::{scene, scratch};
-use std::path::{Path, PathBuf};
+use common::{firmware, scene, scratch};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .canonicalize()
-        .unwrap()
-}
-
-/// Build the firmware (release, thumbv7em-none-eabihf) and return its ELF.
-fn firmware() -> PathBuf {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let out = Command::new(cargo)
-        .current_dir(workspace())
-        .args([
-            "build",
-            "-p",
-            "dexter-firmware",
-            "--release",
-            "--target",
-            "thumbv7em-none-eabihf",
-        ])
-        .output()
-        .expect("cargo runs");
-    assert!(
-        out.status.success(),
-        "building the firmware failed (install the target with `rustup target add thumbv7em-none-eabihf`):\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| workspace().join("target"));
-    target.join("thumbv7em-none-eabihf/release/dexter-firmware")
-}
 
 /// With the fixed corruption seed, at a rate of 0.2 on the UART both delimiters of the
 /// very first frame are lost: the run used to fail at once with "the first sensor frame

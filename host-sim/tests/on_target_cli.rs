@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{dexter, scene, scratch};
+use common::{dexter, firmware, scene, scratch};
 use std::path::Path;
 use std::process::Command;
 
@@ -30,39 +30,6 @@ fn hil_on_a_scene_without_a_controller_names_its_mode() {
         );
         assert!(!err.contains("target_apex_m"), "{name}: {err}");
     }
-}
-
-fn workspace() -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .canonicalize()
-        .unwrap()
-}
-
-/// Build the firmware (release, thumbv7em-none-eabihf) and return its ELF.
-fn firmware() -> std::path::PathBuf {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let out = Command::new(cargo)
-        .current_dir(workspace())
-        .args([
-            "build",
-            "-p",
-            "dexter-firmware",
-            "--release",
-            "--target",
-            "thumbv7em-none-eabihf",
-        ])
-        .output()
-        .expect("cargo runs");
-    assert!(
-        out.status.success(),
-        "building the firmware failed (install the target with `rustup target add thumbv7em-none-eabihf`):\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| workspace().join("target"));
-    target.join("thumbv7em-none-eabihf/release/dexter-firmware")
 }
 
 /// `--firmware fw.elf`, relative to the current directory, with a PATH that holds QEMU but

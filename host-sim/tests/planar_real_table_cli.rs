@@ -9,10 +9,9 @@
 
 mod common;
 
-use common::{dexter, json, ok, scene, scratch};
+use common::{dexter, firmware, json, ok, scene, scratch};
 use serde_json::Value;
 use std::path::Path;
-use std::process::Command;
 
 /// eta* of the scene: G times the 25 cm apex, J/kg.
 const ETA_STAR: f64 = 9.81 * 0.25;
@@ -201,40 +200,11 @@ fn a_time_limit_before_the_impacts_is_a_failure_that_says_so() {
     assert!(err.contains("real_table.max_duration_s"), "{err}");
 }
 
-fn workspace() -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .canonicalize()
-        .unwrap()
-}
-
-/// Build the firmware (release, thumbv7em-none-eabihf).
-fn build_firmware() {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let out = Command::new(cargo)
-        .current_dir(workspace())
-        .args([
-            "build",
-            "-p",
-            "dexter-firmware",
-            "--release",
-            "--target",
-            "thumbv7em-none-eabihf",
-        ])
-        .output()
-        .expect("cargo runs");
-    assert!(
-        out.status.success(),
-        "building the firmware failed (install the target with `rustup target add thumbv7em-none-eabihf`):\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 /// HIL equals SIL: the same summary, key for key apart from the HIL figures and the wall
 /// time, 0 mismatches, 0 link errors, and every step within the 600-instruction budget.
 #[test]
 fn hil_equals_sil_with_no_mismatch_within_the_step_budget() {
-    build_firmware();
+    firmware();
     let s = scene("planar-triangle-sil");
     let sil = json(&["run", &s, "--json"]);
     let hil = json(&["run", &s, "--hil", "--json"]);

@@ -1,5 +1,5 @@
 //! Helpers the binary's tests share: running `dexter`, the shipped scenes, scratch
-//! directories.
+//! directories, the workspace and its firmware image.
 #![allow(dead_code)]
 
 pub mod feeder;
@@ -67,4 +67,38 @@ pub fn csv_rows(path: &Path) -> Vec<std::collections::HashMap<String, f64>> {
                 .collect()
         })
         .collect()
+}
+
+/// The workspace root (the directory above host-sim/).
+pub fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .canonicalize()
+        .unwrap()
+}
+
+/// Build the firmware (release, thumbv7em-none-eabihf) and return its ELF.
+pub fn firmware() -> PathBuf {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = Command::new(cargo)
+        .current_dir(workspace())
+        .args([
+            "build",
+            "-p",
+            "dexter-firmware",
+            "--release",
+            "--target",
+            "thumbv7em-none-eabihf",
+        ])
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "building the firmware failed (install the target with `rustup target add thumbv7em-none-eabihf`):\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| workspace().join("target"));
+    target.join("thumbv7em-none-eabihf/release/dexter-firmware")
 }
