@@ -206,3 +206,220 @@ fn the_clock_adds_up_a_ride_across_switches() {
     assert_eq!((p.ball.height_m, p.ball.velocity_mps), (0.0, 0.0));
     assert_eq!(p.impacts, 0);
 }
+
+// ---- the sampled cargo-mutants pass over the host physics (docs/mutants.md, issue 22) ----
+
+/// A contact at the window's start is inside a window of length zero (`[0, h]` with h = 0:
+/// a ball touching and closing at a segment switch), and a negative window holds none.
+#[test]
+fn a_zero_length_window_holds_the_contact_at_its_start_and_a_negative_one_none() {
+    let c = first_contact(0.0, -1.0, 0.0, 0.0).expect("touching and closing, h = 0");
+    assert_eq!((c.time_s, c.grazing), (0.0, false));
+    let c = first_contact(0.0, 0.0, -1.0, 0.0).expect("touching, curving in, h = 0");
+    assert_eq!((c.time_s, c.grazing), (0.0, true));
+    for (c0, c1, c2) in [(0.0, -1.0, 0.0), (1.0, -1.0, 0.0), (0.0, 0.0, -1.0)] {
+        assert_eq!(first_contact(c0, c1, c2, -1.0), None, "{c0} {c1} {c2}");
+    }
+}
+
+/// A take-off at the smallest subnormal speed, 5e-324 m/s relative to a paddle closing at
+/// 8 m/s^2 relative: its return, 2 u / 8 ~ 1.2e-324 s later, is not representable after 0,
+/// so there is no contact ahead. A contact at t = 0 would be a second impact at the very
+/// instant of the first (a rounding chatter).
+#[test]
+fn a_take_off_whose_return_underflows_is_not_an_immediate_re_impact() {
+    assert_eq!(first_contact(0.0, 5e-324, -4.0, 1.0), None);
+    // a normal take-off at 2 m/s comes back at 2 u / 8 = 0.5 s
+    let c = first_contact(0.0, 2.0, -4.0, 1.0).expect("the return");
+    assert_eq!((c.time_s, c.grazing), (0.5, false));
+}
+
+/// The paddle's velocity over a segment is v + a t (its height's derivative).
+#[test]
+fn the_paddles_velocity_is_its_start_velocity_plus_acceleration_times_time() {
+    let p = Poly {
+        height_m: 0.25,
+        velocity_mps: -1.5,
+        accel_mps2: 4.0,
+    };
+    for t in [0.0, 0.125, 0.5, 2.0] {
+        assert_eq!(p.velocity_at(t), -1.5 + 4.0 * t, "t = {t}");
+        // and it is the height's derivative (central difference, exact for a quadratic
+        // up to rounding)
+        let dh = (p.height_at(t + 1e-3) - p.height_at(t - 1e-3)) / 2e-3;
+        assert!((dh - p.velocity_at(t)).abs() < 1e-9, "t = {t}: {dh}");
+    }
+}
+
+/// Drag-free apex of the drag model (c = 0): h + v^2 / (2 g), as the ballistic one.
+#[test]
+fn the_drag_models_apex_without_drag_is_the_ballistic_apex() {
+    use dexter_sim::engine::drag::{DragFlight, Rk4};
+    let fl = DragFlight::new(Rk4, 0.0, 1e-3, 0.0);
+    let ball = BallState::new(0.5, 3.0);
+    assert_eq!(fl.apex_m(&ball, G), 0.5 + 9.0 / (2.0 * G));
+    assert_eq!(Ballistic.apex_m(&ball, G), 0.5 + 9.0 / (2.0 * G));
+    assert_eq!(
+        fl.apex_m(&BallState::new(0.5, -3.0), G),
+        0.5,
+        "falling: its height"
+    );
+}
+
+/// A ball on the paddle, moving with it (same height, same velocity), while the paddle
+/// accelerates down at 20 m/s^2 > g: the ball leaves it and flies the whole window. With
+/// quadratic drag its rise is the closed form y = (vt^2 / g) ln(cos(th0 - g t / vt) / cos th0),
+/// v = vt tan(th0 - g t / vt), vt = sqrt(g / c), th0 = atan(v0 / vt). A contact at once
+/// would glue the ball to a paddle that falls away faster than gravity.
+#[test]
+fn a_ball_moving_with_a_paddle_that_falls_away_faster_than_g_leaves_it() {
+    use dexter_sim::engine::drag::{DragFlight, Rk4};
+    let (c, v0, h) = (0.01, 1.0, 0.1);
+    let paddle = Poly {
+        height_m: 0.0,
+        velocity_mps: v0,
+        accel_mps2: -20.0,
+    };
+    let mut fl = DragFlight::new(Rk4, c, 1e-3, 0.0);
+    let mut ball = BallState::new(0.0, v0);
+    assert_eq!(fl.fly(&mut ball, &paddle, h, G), FlightEnd::Reached(h));
+    let vt = (G / c).sqrt();
+    let th0 = (v0 / vt).atan();
+    assert!(th0 * vt / G > h, "still rising at the window's end");
+    let th = th0 - G * h / vt;
+    let y = vt * vt / G * (th.cos() / th0.cos()).ln();
+    let v = vt * th.tan();
+    assert!((ball.height_m - y).abs() < 1e-9, "{} vs {y}", ball.height_m);
+    assert!(
+        (ball.velocity_mps - v).abs() < 1e-9,
+        "{} vs {v}",
+        ball.velocity_mps
+    );
+    assert!(ball.height_m > paddle.height_at(h));
+}
+
+/// The switching table of the clock tests, flown over without an impact: after 10.5 ms the
+/// table has switched exactly 10 times and is 0.5 ms into its 11th segment (the last,
+/// partial flight segment is no switch).
+#[test]
+fn a_flight_ending_inside_a_segment_does_not_switch_the_surface() {
+    let mut p = plant(BallState::new(1.0, 0.0), 0.5);
+    assert_eq!(p.advance_to(0.0105, 10, &mut |_| {}), Advance::Reached);
+    assert_eq!(p.time_s, 0.0105);
+    assert_eq!(p.surface.switches, 10);
+    assert!(
+        (p.surface.into_segment_s - 0.0005).abs() < 1e-12,
+        "{}",
+        p.surface.into_segment_s
+    );
+    assert!((p.ball.height_m - (1.0 - 0.5 * G * 0.0105 * 0.0105)).abs() < 1e-12);
+}
+
+/// On a driven surface (one whose rest is not final) the ball's impacts within one
+/// `advance_to` call are capped (`ZenoPolicy::max_impacts_per_segment`, 64): with Zeno
+/// detection off (thresholds 0) a ball dropped from 1 m with e = 1/2 would bounce until its
+/// speed underflows; the cap forces resting contact at the 64th impact, at
+/// t1 (1 + 2 e (1 - e^63) / (1 - e)) = 3 t1 (to rounding), t1 = sqrt(2 / g).
+#[test]
+fn impacts_beyond_the_cap_in_one_call_force_resting_contact() {
+    let table = SwitchingTable {
+        every_s: 1e-3,
+        into_segment_s: 0.0,
+        switches: 0,
+    };
+    let zeno = ZenoPolicy {
+        velocity_threshold_mps: 0.0,
+        relative_threshold: 0.0,
+        max_impacts_per_segment: 64,
+    };
+    let mut p = LinePlant::new(
+        G,
+        0.5,
+        Ballistic,
+        table,
+        NoJitter,
+        zeno,
+        BallState::new(1.0, 0.0),
+    );
+    assert_eq!(p.advance_to(2.0, 100_000, &mut |_| {}), Advance::Reached);
+    assert_eq!(p.impacts, 64);
+    assert_eq!(p.rest_count, 1);
+    let rest = p.rests[0];
+    assert!(rest.forced);
+    assert_eq!(rest.after_impacts, 64);
+    let t1 = (2.0 / G).sqrt();
+    assert!(
+        (rest.time_s - 3.0 * t1).abs() < 1e-9,
+        "{} vs {}",
+        rest.time_s,
+        3.0 * t1
+    );
+    assert_eq!((p.ball.height_m, p.ball.velocity_mps), (0.0, 0.0));
+}
+
+/// `window(p) = max(4 p, 12)` differences, `values_needed(p) = window(p) + p` values (module
+/// docs of `period.rs`), and a sequence of exactly that many values is judged: an exact
+/// period-p orbit of `values_needed(p)` values has period p, one value fewer is too short.
+#[test]
+fn the_period_window_is_max_of_4p_and_12_and_exactly_that_many_values_suffice() {
+    use dexter_sim::period::{settled_period, values_needed, window, Tolerance};
+    for p in 1..=8usize {
+        assert_eq!(window(p), (4 * p).max(12), "p = {p}");
+        assert_eq!(values_needed(p), (4 * p).max(12) + p, "p = {p}");
+        let orbit: Vec<f64> = (0..values_needed(p))
+            .map(|k| 1.0 + 0.25 * (k % p) as f64)
+            .collect();
+        let tol = Tolerance::Relative(1e-3);
+        assert_eq!(settled_period(&orbit, p, tol), Some(p), "p = {p}");
+        assert_eq!(
+            settled_period(&orbit[1..], p, tol),
+            None,
+            "p = {p}, one short"
+        );
+    }
+}
+
+/// Rule 1 (module docs of `period.rs`): every one of the last max(4p, 12) differences must
+/// be within the tolerance. 1 + 0.5 (1/10)^k for k = 0..12 has converged to 1 by its last
+/// value (its geometric tail bound is ~5e-12), but its first difference in the window,
+/// 0.45, is not within 1e-3: not settled. Twelve values later the window is clear.
+#[test]
+fn a_difference_beyond_the_tolerance_in_the_window_is_not_settled() {
+    use dexter_sim::period::{settled_period, Tolerance};
+    let tol = Tolerance::Relative(1e-3);
+    let v: Vec<f64> = (0..13).map(|k| 1.0 + 0.5 * 0.1f64.powi(k)).collect();
+    assert_eq!(settled_period(&v, 1, tol), None);
+    let v: Vec<f64> = (0..26).map(|k| 1.0 + 0.5 * 0.1f64.powi(k)).collect();
+    assert_eq!(settled_period(&v, 1, tol), Some(1));
+}
+
+/// Rules 2 and 3 near a flip: 1 + 1e-7 (-0.9999)^k converges to period 1 so slowly that
+/// its lag-1 differences (2e-7) bound the remaining motion only by 2e-7 / (1 - 0.9999) =
+/// 2e-3 > 1e-3 (not settled to 1), while its lag-2 differences are within 1e-7 of zero:
+/// rule 2 alone would call it period 2. Its lag-1 differences still shrink (by 0.9999^14
+/// across the window, a relative 1.4e-3 > DIVISOR_DECAY): still converging to period 1,
+/// so no period.
+#[test]
+fn an_orbit_still_converging_to_half_its_period_has_none() {
+    use dexter_sim::period::{settled_period, Tolerance};
+    let tol = Tolerance::Relative(1e-3);
+    for n in [40, 100] {
+        let v: Vec<f64> = (0..n).map(|k| 1.0 + 1e-7 * (-0.9999f64).powi(k)).collect();
+        assert_eq!(settled_period(&v, 8, tol), None, "n = {n}");
+    }
+}
+
+/// A genuine period-2 orbit, [1, 1.5] plus a transient 0.3 / 2^k long gone by the window
+/// (below 1e-12 of the values there): period 2. Its lag-1 differences over the window repeat
+/// (0.5 to 1e-13): not converging to period 1, whatever the transient was before the window.
+#[test]
+fn a_period_two_orbit_after_a_transient_has_period_two() {
+    use dexter_sim::period::{settled_period, Tolerance};
+    let tol = Tolerance::Relative(1e-3);
+    for n in [40, 60, 100] {
+        let v: Vec<f64> = (0..n)
+            .map(|k| [1.0, 1.5][k % 2] + 0.3 * 0.5f64.powi(k as i32))
+            .collect();
+        assert_eq!(settled_period(&v, 8, tol), Some(2), "n = {n}");
+    }
+}
