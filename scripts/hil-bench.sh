@@ -31,10 +31,10 @@ DEXTER_BENCH_DIR="$PWD/$out" cargo test -q --release -p dexter-tests --test hil 
   --ignored --nocapture --test-threads 1 bench_figures lockstep_speed
 echo "load average after: $(cat /proc/loadavg)"
 echo "static worst cases of the shipped image's control steps (scripts/wcet.py):"
-for sym in dexter_core::control::Controller::step \
-  'dexter_core::tilt_control::TiltControllerWith$LT$T$GT$::step' \
-  'dexter_core::tilt_control::TiltControllerWith$LT$T$GT$::safe' \
-  dexter_core::hop_control::HopController::step dexter_core::hop_control::HopController::safe; do
+for sym in '<dexter_core::control::Controller as dexter_core::fixed_rate::FixedRate>::step' \
+  'dexter_core::tilt_control::TiltControllerWith<T>::step' \
+  'dexter_core::tilt_control::TiltControllerWith<T>::safe' \
+  '<dexter_core::hop_control::HopController as dexter_core::fixed_rate::FixedRate>::step' '<dexter_core::hop_control::HopController as dexter_core::fixed_rate::FixedRate>::safe'; do
   python3 scripts/wcet.py "$out/libm.elf" "$sym"
 done
 DEXTER_BENCH_DIR="$PWD/$out" DEXTER_TILT_SOURCES=poly,backend cargo test -q --release \

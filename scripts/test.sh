@@ -94,11 +94,11 @@ step "static worst-case control steps, from each image as flashed (scripts/wcet.
 python3 scripts/wcet_test.py
 # 296 = the line juggler's 300-instruction goal less the HIL measurement window (3 or 4
 # instructions around the call, as the compiler schedules it: 4 since 2026-11-29)
-python3 scripts/wcet.py "$FW" dexter_core::control::Controller::step --max-instructions 296
-python3 scripts/wcet.py "$ARM_FW" dexter_core::control::Controller::step --max-instructions 296
+python3 scripts/wcet.py "$FW" '<dexter_core::control::Controller as dexter_core::fixed_rate::FixedRate>::step' --max-instructions 296
+python3 scripts/wcet.py "$ARM_FW" '<dexter_core::control::Controller as dexter_core::fixed_rate::FixedRate>::step' --max-instructions 296
 # 416 = ArmController's 424-instruction budget less the 8 its HIL measurement window adds
 # (shared/src/arm_control.rs, STEP_INSTRUCTION_BUDGET)
-python3 scripts/wcet.py "$ARM_FW" dexter_core::arm_control::ArmController::step --max-instructions 416
+python3 scripts/wcet.py "$ARM_FW" '<dexter_core::arm_control::ArmController as dexter_core::fixed_rate::FixedRate>::step' --max-instructions 416
 
 step "the NUCLEO-F446RE image builds for $TARGET (release); its sizes are checked by tests/board.rs"
 cargo build -p dexter-nucleo-f446re --release --target "$TARGET"

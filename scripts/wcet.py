@@ -4,8 +4,9 @@
     scripts/wcet.py ELF SYMBOL [--loop-cap ADDR=N ...] [--max-instructions N]
                     [--max-cycles N] [--path] [--mca] [--json]
 
-SYMBOL is a demangled Rust path (`dexter_core::control::Controller::step`) or a mangled or
-plain symbol name; it must match exactly one function (the hash suffix may be left off).
+SYMBOL is a demangled Rust path (`dexter_core::tilt_control::TiltControllerWith<T>::step`, or
+for a trait method `<dexter_core::control::Controller as dexter_core::fixed_rate::FixedRate>::step`)
+or a mangled or plain symbol name; it must match exactly one function (the hash suffix may be left off).
 
 What it does:
 1. disassembles the function with llvm-objdump (Debian's `llvm-objdump`, or rustup's
@@ -394,10 +395,25 @@ def read_symbols(elf, nm):
     return syms
 
 
+LEGACY_ESCAPES = (("$LT$", "<"), ("$GT$", ">"), ("$u20$", " "), ("$C$", ","), ("$RF$", "&"),
+                  ("$BP$", "*"), ("$u27$", "'"), ("$u5b$", "["), ("$u5d$", "]"), ("..", "::"))
+
+
+def rust_path(name):
+    """`name` with the legacy mangling's escapes that llvm-nm -C leaves in undone:
+    `_$LT$a..B$u20$as$u20$c..T$GT$::f` is `<a::B as c::T>::f`, a trait method's path."""
+    if name.startswith("_$"):
+        name = name[1:]
+    for escape, char in LEGACY_ESCAPES:
+        name = name.replace(escape, char)
+    return name
+
+
 def resolve(symbols, wanted):
     def plain(name):
         return re.sub(r"::h[0-9a-f]{16}$", "", name)
-    hits = [s for s in symbols if wanted in (s["name"], s["mangled"], plain(s["name"]))]
+    hits = [s for s in symbols
+            if wanted in (s["name"], s["mangled"], plain(s["name"]), plain(rust_path(s["name"])))]
     if not hits:
         hits = [s for s in symbols if wanted in s["name"]]
     hits = list({s["addr"]: s for s in hits}.values())

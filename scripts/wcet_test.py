@@ -56,6 +56,18 @@ class Tests(unittest.TestCase):
         fn = wcet.Function("f", wcet.parse_listing(text), start, start + size)
         return wcet.longest_path(fn, metric, an, caps or {})[0]
 
+    def test_trait_methods_resolve_by_their_rust_path(self):
+        # llvm-nm -C leaves the legacy mangling's escapes in a trait method's name
+        nm = "_$LT$dexter_core..control..Controller$u20$as$u20$dexter_core..fixed_rate..FixedRate$GT$::step::he9b4685ddad75cce"
+        other = nm.replace("control..Controller", "hop_control..HopController")
+        syms = [{"addr": 0x10, "size": 4, "name": nm, "mangled": nm},
+                {"addr": 0x20, "size": 4, "name": other, "mangled": other}]
+        hit = wcet.resolve(syms, "<dexter_core::control::Controller as dexter_core::fixed_rate::FixedRate>::step")
+        self.assertEqual(hit["addr"], 0x10)
+        self.assertEqual(wcet.rust_path("TiltControllerWith$LT$T$GT$::step"), "TiltControllerWith<T>::step")
+        with self.assertRaises(wcet.AnalysisError):
+            wcet.resolve(syms, "<dexter_core::control::Controller as dexter_core::fixed_rate::FixedRate>::safe")
+
     def test_diamond_by_hand(self):
         # long arm: cmp, bne (not taken), vdiv, ldr, b, bx = 6 instructions
         self.assertEqual(self.worst(DIAMOND), 6)

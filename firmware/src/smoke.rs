@@ -6,6 +6,7 @@
 use crate::board::{StepTimer, SysTickInstructions};
 use cortex_m::peripheral::SYST;
 use dexter_core::control::{Controller, ControllerParams};
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::Mode;
 use dexter_core::protocol::SensorFrame;
 

@@ -3,6 +3,7 @@
 #![no_main]
 
 use dexter_core::control::{Controller, ControllerParams};
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::{Fault, Mode};
 use dexter_core::protocol::SensorFrame;
 use libfuzzer_sys::fuzz_target;
@@ -11,7 +12,8 @@ fuzz_target!(|data: &[u8]| {
     let params = ControllerParams::default();
     let mut c = Controller::new(params).expect("default params are valid");
     for chunk in data.chunks_exact(16) {
-        let word = |i: usize| u32::from_le_bytes([chunk[i], chunk[i + 1], chunk[i + 2], chunk[i + 3]]);
+        let word =
+            |i: usize| u32::from_le_bytes([chunk[i], chunk[i + 1], chunk[i + 2], chunk[i + 3]]);
         let frame = SensorFrame {
             seq: word(0),
             ball_height_m: f32::from_bits(word(4)),

@@ -3,6 +3,7 @@
 //! the paper's ideal table (Zumel & Erdmann sec. 2.3).
 
 use dexter_core::fixed_rate::Fault;
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::tilt_control::{TiltCommand, TiltController, TiltFrame};
 use dexter_sim::controller::{ControllerError, Sil, StepController, StepOutput};
 use dexter_sim::model::planar::real_table::{

@@ -11,6 +11,7 @@
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use dexter_core::control::{Controller, ControllerParams};
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::Mode;
 use dexter_core::math::{cos_poly_f32, sin_poly_f32};
 use dexter_core::mirror::MirrorLaw;

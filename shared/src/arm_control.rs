@@ -45,7 +45,7 @@
 //! allocates nothing and never panics.
 
 use crate::bspline::{Knots, SplineSample};
-use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::fixed_rate::{reply_from_fields, Fault, FixedRate, Mode, Telemetry};
 use crate::freshness::Freshness;
 use crate::math::{cos_poly_f32, Real};
 use crate::mirror::PaddleReference;
@@ -247,19 +247,7 @@ pub struct ArmCommand {
     pub fault: Fault,
 }
 
-impl Reply for ArmCommand {
-    fn seq(&self) -> u32 {
-        self.seq
-    }
-
-    fn mode(&self) -> Mode {
-        self.mode
-    }
-
-    fn fault(&self) -> Fault {
-        self.fault
-    }
-}
+reply_from_fields!(ArmCommand);
 
 /// The arm's trajectory-tracking controller, stepped at a fixed rate.
 #[derive(Clone, Debug)]
@@ -277,22 +265,6 @@ pub struct ArmController {
 }
 
 impl ArmController {
-    /// A controller; the error names the first invalid parameter.
-    #[inline(never)]
-    pub fn new(params: ArmParams) -> Result<Self, ParamError> {
-        let tracker = params.tracker()?;
-        let start = params.trajectory.sample(0.0).unwrap_or_default();
-        Ok(Self {
-            params,
-            tracker,
-            first_seq: 0,
-            seq: Freshness::new(),
-            fault: Fault::None,
-            joint: PaddleState::new(start.angle_rad, 0.0),
-            last_error_rad: 0.0,
-        })
-    }
-
     /// The reference at trajectory time `t_s`: the spline, then braking, then holding.
     pub fn reference(&self, t_s: f32) -> SplineSample<f32> {
         let k = &self.params.trajectory;
@@ -335,10 +307,64 @@ impl ArmController {
         self.fault
     }
 
+    /// Validate a frame and count stale repeats (a repeated sample keeps the time).
+    fn check(&mut self, frame: &ArmFrame) -> Result<(), Fault> {
+        if !frame.angle_rad.is_finite() || !frame.velocity_radps.is_finite() {
+            return Err(Fault::NonFinite);
+        }
+        let l = &self.params.limits;
+        let margin = 0.05 * (l.max_angle_rad - l.min_angle_rad);
+        let range = (l.min_angle_rad - margin)..=(l.max_angle_rad + margin);
+        if !range.contains(&frame.angle_rad)
+            || frame.velocity_radps.abs() > 2.0 * l.velocity_max_radps
+        {
+            return Err(Fault::OutOfRange);
+        }
+        self.seq.check(frame.seq, self.params.stale_limit_steps)?;
+        Ok(())
+    }
+}
+
+impl FixedRate for ArmController {
+    type Params = ArmParams;
+    type Frame = ArmFrame;
+    type Command = ArmCommand;
+    /// 424 instructions, for every input and every trajectory the validator accepts: the
+    /// step has no loop (one spline segment, whatever the knot count; one polynomial
+    /// cosine), and the static worst case over every path of
+    /// `<ArmController as FixedRate>::step` in the arm image as flashed, callees
+    /// included (`scripts/wcet.py`, run by `scripts/test.sh` with `--max-instructions 416`),
+    /// is 416 instructions. The HIL measurement window of the size-optimised firmware adds
+    /// 8 to what it reports: 10 instructions between its two SysTick reads around the call
+    /// (argument moves, the call, the reads of the sret command; counted in the disassembly
+    /// of the image's `Server::step`), less the 2 its calibration subtracts. QEMU measures
+    /// up to 422 over the four shipped scenes (tests/hil_arm.rs, `--nocapture`).
+    const STEP_INSTRUCTION_BUDGET: u32 = 424;
+
+    /// A controller; the error names the first invalid parameter.
+    #[inline(never)]
+    fn new(params: ArmParams) -> Result<Self, ParamError> {
+        let tracker = params.tracker()?;
+        let start = params.trajectory.sample(0.0).unwrap_or_default();
+        Ok(Self {
+            params,
+            tracker,
+            first_seq: 0,
+            seq: Freshness::new(),
+            fault: Fault::None,
+            joint: PaddleState::new(start.angle_rad, 0.0),
+            last_error_rad: 0.0,
+        })
+    }
+
+    fn params(&self) -> &ArmParams {
+        &self.params
+    }
+
     /// One control period: the command for `frame`. Out of line, so the firmware has one
     /// symbol for the static worst-case tool (`scripts/wcet.py`).
     #[inline(never)]
-    pub fn step(&mut self, frame: &ArmFrame) -> ArmCommand {
+    fn step(&mut self, frame: &ArmFrame) -> ArmCommand {
         if self.fault != Fault::None {
             return self.safe(frame.seq, self.fault);
         }
@@ -376,7 +402,7 @@ impl ArmController {
     }
 
     /// The safe command: latch `fault`, brake the joint to rest and hold it there.
-    pub fn safe(&mut self, seq: u32, fault: Fault) -> ArmCommand {
+    fn safe(&mut self, seq: u32, fault: Fault) -> ArmCommand {
         if self.fault == Fault::None {
             self.fault = fault;
         }
@@ -396,56 +422,6 @@ impl ArmController {
             mode: Mode::Safe,
             fault: self.fault,
         }
-    }
-
-    /// Validate a frame and count stale repeats (a repeated sample keeps the time).
-    fn check(&mut self, frame: &ArmFrame) -> Result<(), Fault> {
-        if !frame.angle_rad.is_finite() || !frame.velocity_radps.is_finite() {
-            return Err(Fault::NonFinite);
-        }
-        let l = &self.params.limits;
-        let margin = 0.05 * (l.max_angle_rad - l.min_angle_rad);
-        let range = (l.min_angle_rad - margin)..=(l.max_angle_rad + margin);
-        if !range.contains(&frame.angle_rad)
-            || frame.velocity_radps.abs() > 2.0 * l.velocity_max_radps
-        {
-            return Err(Fault::OutOfRange);
-        }
-        self.seq.check(frame.seq, self.params.stale_limit_steps)?;
-        Ok(())
-    }
-}
-
-impl FixedRate for ArmController {
-    type Params = ArmParams;
-    type Frame = ArmFrame;
-    type Command = ArmCommand;
-    /// 424 instructions, for every input and every trajectory the validator accepts: the
-    /// step has no loop (one spline segment, whatever the knot count; one polynomial
-    /// cosine), and the static worst case over every path of
-    /// `dexter_core::arm_control::ArmController::step` in the arm image as flashed, callees
-    /// included (`scripts/wcet.py`, run by `scripts/test.sh` with `--max-instructions 416`),
-    /// is 416 instructions. The HIL measurement window of the size-optimised firmware adds
-    /// 8 to what it reports: 10 instructions between its two SysTick reads around the call
-    /// (argument moves, the call, the reads of the sret command; counted in the disassembly
-    /// of the image's `Server::step`), less the 2 its calibration subtracts. QEMU measures
-    /// up to 422 over the four shipped scenes (tests/hil_arm.rs, `--nocapture`).
-    const STEP_INSTRUCTION_BUDGET: u32 = 424;
-
-    fn new(params: ArmParams) -> Result<Self, ParamError> {
-        ArmController::new(params)
-    }
-
-    fn params(&self) -> &ArmParams {
-        &self.params
-    }
-
-    fn step(&mut self, frame: &ArmFrame) -> ArmCommand {
-        ArmController::step(self, frame)
-    }
-
-    fn safe(&mut self, seq: u32, fault: Fault) -> ArmCommand {
-        ArmController::safe(self, seq, fault)
     }
 
     fn telemetry(&self) -> Telemetry {

@@ -16,7 +16,7 @@
 //! the estimate is valid again, and then tracks ([`Mode::Track`]).
 
 use crate::estimate::{BallEstimator, Estimate, EstimatorParams};
-use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::fixed_rate::{reply_from_fields, Fault, FixedRate, Mode, Telemetry};
 use crate::freshness::Freshness;
 use crate::math::Real;
 use crate::mirror::{MirrorLaw, PaddleReference};
@@ -185,8 +185,55 @@ impl PlausiblePaddle {
 }
 
 impl Controller {
+    /// The mirror law in use.
+    pub fn law(&self) -> &MirrorLaw<f32> {
+        &self.law
+    }
+
+    /// The latest ball estimate.
+    pub fn estimate(&self) -> &Estimate {
+        &self.estimate
+    }
+
+    /// Validate a frame; `Ok(true)` if it carries a new sample, `Ok(false)` if it repeats
+    /// the last one (within the stale limit).
+    fn check(&mut self, frame: &SensorFrame) -> Result<bool, Fault> {
+        let p = &self.params;
+        let q = &self.plausible;
+        let ball_range = p.ball_height_min_m..=p.ball_height_max_m;
+        let paddle_range = q.min_height_m..=q.max_height_m;
+        // NaN fails every comparison, so one pass of range checks also rejects every
+        // non-finite frame (the bounds are finite); only a rejected frame pays for telling
+        // the two faults apart
+        if !(ball_range.contains(&frame.ball_height_m)
+            && paddle_range.contains(&frame.paddle_height_m)
+            && frame.paddle_velocity_mps.abs() <= q.max_speed_mps)
+        {
+            let values = [
+                frame.ball_height_m,
+                frame.paddle_height_m,
+                frame.paddle_velocity_mps,
+            ];
+            return Err(if values.iter().any(|v| !v.is_finite()) {
+                Fault::NonFinite
+            } else {
+                Fault::OutOfRange
+            });
+        }
+        // a sample is new if its sequence number moved forward (wrapping arithmetic)
+        self.seq.check(frame.seq, self.params.stale_limit_steps)
+    }
+}
+
+impl FixedRate for Controller {
+    type Params = ControllerParams;
+    type Frame = SensorFrame;
+    type Command = ActuatorCommand;
+    /// The line-juggler goal (BENCHMARKS.md, "Control step on the target").
+    const STEP_INSTRUCTION_BUDGET: u32 = 300;
+
     /// A controller; the error names the first invalid parameter.
-    pub fn new(params: ControllerParams) -> Result<Self, ParamError> {
+    fn new(params: ControllerParams) -> Result<Self, ParamError> {
         params.validate()?;
         let law = MirrorLaw::new(
             params.kappa0,
@@ -214,29 +261,12 @@ impl Controller {
     }
 
     /// The parameters this controller runs with.
-    pub fn params(&self) -> &ControllerParams {
+    fn params(&self) -> &ControllerParams {
         &self.params
     }
 
-    /// The mirror law in use.
-    pub fn law(&self) -> &MirrorLaw<f32> {
-        &self.law
-    }
-
-    /// The latest ball estimate.
-    pub fn estimate(&self) -> &Estimate {
-        &self.estimate
-    }
-
-    /// Telemetry fields the core knows (the firmware adds timing and link counts): estimate
-    /// slot 0 is the ball height, m, slot 1 its velocity, m/s.
-    pub fn telemetry(&self) -> Telemetry {
-        let ball = &self.estimate.ball;
-        Telemetry::with_estimate(&[ball.height_m, ball.velocity_mps], self.estimate.valid)
-    }
-
     /// One control period: the command for `frame`.
-    pub fn step(&mut self, frame: &SensorFrame) -> ActuatorCommand {
+    fn step(&mut self, frame: &SensorFrame) -> ActuatorCommand {
         match self.check(frame) {
             Err(fault) => self.safe(frame.seq, fault),
             Ok(fresh) => {
@@ -278,7 +308,7 @@ impl Controller {
     }
 
     /// The safe command for an external fault (e.g. the firmware's link timeout).
-    pub fn safe(&mut self, seq: u32, fault: Fault) -> ActuatorCommand {
+    fn safe(&mut self, seq: u32, fault: Fault) -> ActuatorCommand {
         self.estimator.reset();
         self.estimate.valid = false;
         let u = self.tracker.brake(&self.paddle);
@@ -298,81 +328,20 @@ impl Controller {
         }
     }
 
-    /// Validate a frame; `Ok(true)` if it carries a new sample, `Ok(false)` if it repeats
-    /// the last one (within the stale limit).
-    fn check(&mut self, frame: &SensorFrame) -> Result<bool, Fault> {
-        let p = &self.params;
-        let q = &self.plausible;
-        let ball_range = p.ball_height_min_m..=p.ball_height_max_m;
-        let paddle_range = q.min_height_m..=q.max_height_m;
-        // NaN fails every comparison, so one pass of range checks also rejects every
-        // non-finite frame (the bounds are finite); only a rejected frame pays for telling
-        // the two faults apart
-        if !(ball_range.contains(&frame.ball_height_m)
-            && paddle_range.contains(&frame.paddle_height_m)
-            && frame.paddle_velocity_mps.abs() <= q.max_speed_mps)
-        {
-            let values = [
-                frame.ball_height_m,
-                frame.paddle_height_m,
-                frame.paddle_velocity_mps,
-            ];
-            return Err(if values.iter().any(|v| !v.is_finite()) {
-                Fault::NonFinite
-            } else {
-                Fault::OutOfRange
-            });
-        }
-        // a sample is new if its sequence number moved forward (wrapping arithmetic)
-        self.seq.check(frame.seq, self.params.stale_limit_steps)
-    }
-}
-
-impl FixedRate for Controller {
-    type Params = ControllerParams;
-    type Frame = SensorFrame;
-    type Command = ActuatorCommand;
-    /// The line-juggler goal (BENCHMARKS.md, "Control step on the target").
-    const STEP_INSTRUCTION_BUDGET: u32 = 300;
-
-    fn new(params: ControllerParams) -> Result<Self, ParamError> {
-        Controller::new(params)
-    }
-
-    fn params(&self) -> &ControllerParams {
-        Controller::params(self)
-    }
-
-    fn step(&mut self, frame: &SensorFrame) -> ActuatorCommand {
-        Controller::step(self, frame)
-    }
-
-    fn safe(&mut self, seq: u32, fault: Fault) -> ActuatorCommand {
-        Controller::safe(self, seq, fault)
-    }
-
+    /// Telemetry fields the core knows (the firmware adds timing and link counts): estimate
+    /// slot 0 is the ball height, m, slot 1 its velocity, m/s.
     fn telemetry(&self) -> Telemetry {
-        Controller::telemetry(self)
+        let ball = &self.estimate.ball;
+        Telemetry::with_estimate(&[ball.height_m, ball.velocity_mps], self.estimate.valid)
     }
 }
 
-impl Reply for ActuatorCommand {
-    fn seq(&self) -> u32 {
-        self.seq
-    }
-
-    fn mode(&self) -> Mode {
-        self.mode
-    }
-
-    fn fault(&self) -> Fault {
-        self.fault
-    }
-}
+reply_from_fields!(ActuatorCommand);
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fixed_rate::Reply;
 
     fn frame(seq: u32, ball: f32) -> SensorFrame {
         SensorFrame {
@@ -592,25 +561,18 @@ mod tests {
     }
 
     #[test]
-    fn fixed_rate_trait_forwards_to_the_controller() {
-        let (mut a, seq) = tracking_controller();
-        let mut b = a.clone();
-        let f = frame(seq, 0.2);
-        let via_trait = <Controller as FixedRate>::step(&mut a, &f);
-        assert_eq!(via_trait, b.step(&f));
+    fn reply_answers_are_the_commands_own_fields() {
+        let (mut c, seq) = tracking_controller();
+        let track = c.step(&frame(seq, 0.2));
         assert_eq!(
-            (via_trait.seq(), via_trait.mode(), via_trait.fault()),
+            (track.seq(), track.mode(), track.fault()),
             (seq, Mode::Track, Fault::None)
         );
-        assert_eq!(<Controller as FixedRate>::telemetry(&a), b.telemetry());
-        assert_eq!(<Controller as FixedRate>::params(&a), b.params());
-        let safe = <Controller as FixedRate>::safe(&mut a, 77, Fault::LinkTimeout);
-        assert_eq!(safe, b.safe(77, Fault::LinkTimeout));
+        let safe = c.safe(77, Fault::LinkTimeout);
         assert_eq!(
             (safe.seq(), safe.mode(), safe.fault()),
             (77, Mode::Safe, Fault::LinkTimeout)
         );
-        assert!(<Controller as FixedRate>::new(ControllerParams::default()).is_ok());
     }
 
     #[test]

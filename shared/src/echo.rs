@@ -8,7 +8,7 @@
 //! protocol generic: the firmware hosts it beside the line juggler, and the HIL tests
 //! switch between the two and send frames of the wrong kind.
 
-use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::fixed_rate::{reply_from_fields, Fault, FixedRate, Mode, Telemetry};
 use crate::params::{finite, ParamError};
 use serde::{Deserialize, Serialize};
 
@@ -48,19 +48,7 @@ pub struct EchoCommand {
     pub fault: Fault,
 }
 
-impl Reply for EchoCommand {
-    fn seq(&self) -> u32 {
-        self.seq
-    }
-
-    fn mode(&self) -> Mode {
-        self.mode
-    }
-
-    fn fault(&self) -> Fault {
-        self.fault
-    }
-}
+reply_from_fields!(EchoCommand);
 
 /// The link-check controller.
 #[derive(Clone, Copy, Debug)]

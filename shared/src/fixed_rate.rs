@@ -161,3 +161,24 @@ pub trait Reply: Copy + Serialize {
         }
     }
 }
+
+/// Implements [`Reply`] for a command struct that carries the three answers as its fields
+/// `seq: u32`, `mode: Mode` and `fault: Fault`, as every command in the core does.
+macro_rules! reply_from_fields {
+    ($command:ty) => {
+        impl $crate::fixed_rate::Reply for $command {
+            fn seq(&self) -> u32 {
+                self.seq
+            }
+
+            fn mode(&self) -> $crate::fixed_rate::Mode {
+                self.mode
+            }
+
+            fn fault(&self) -> $crate::fixed_rate::Fault {
+                self.fault
+            }
+        }
+    };
+}
+pub(crate) use reply_from_fields;

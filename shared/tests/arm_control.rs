@@ -3,6 +3,7 @@
 
 use dexter_core::arm_control::{ArmCommand, ArmController, ArmFrame, ArmParams};
 use dexter_core::bspline::{Knots, MAX_KNOTS};
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::{Fault, Mode};
 use dexter_core::params::ParamError;
 use proptest::prelude::*;

@@ -26,6 +26,7 @@
 //!   ratio s + q x + c^2 x^2: monotone for s > 0, alternating for s < 0.
 
 use dexter_core::control::{Controller, ControllerParams};
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::Mode;
 use dexter_core::protocol::SensorFrame;
 

@@ -2,6 +2,7 @@
 //! a finite command within its limits, or the safe command with a fault code. It never panics.
 
 use dexter_core::control::{Controller, ControllerParams};
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::{Fault, Mode};
 use dexter_core::protocol::SensorFrame;
 use proptest::prelude::*;

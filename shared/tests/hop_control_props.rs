@@ -2,6 +2,7 @@
 //! accepted parameters, the command is a valid valve command or the safe state. It never
 //! panics, and the valve is never open without a finite thrust within the law's limit.
 
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::{Fault, Mode};
 use dexter_core::hop_control::{HopCommand, HopController, HopFrame, HopParams, HopThrust};
 use proptest::prelude::*;

@@ -2,6 +2,7 @@
 //! laws say at the predicted impact, the safe state, parameter validation, wire sizes, and
 //! for any input a finite command within the limits or the safe state.
 
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::{Fault, Mode};
 use dexter_core::params::ParamError;
 use dexter_core::tilt::{BodyState, EnergyFeedback};

@@ -127,6 +127,7 @@ mod app {
     use crate::{HostSession, CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD, WATCHDOG_MS};
     use core::sync::atomic::Ordering;
     use dexter_core::control::{Controller, ControllerParams};
+    use dexter_core::fixed_rate::FixedRate;
     use dexter_firmware::board::DwtCycles;
     use dexter_firmware::ring::{ByteRing, Producer};
     use dexter_firmware::server::Server;

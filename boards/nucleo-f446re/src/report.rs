@@ -4,6 +4,7 @@
 use crate::rig::BoardRig;
 use crate::CONTROL_RATE_HZ;
 use dexter_core::control::Controller;
+use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::{Fault, Mode};
 use dexter_core::protocol::ActuatorCommand;
 use dexter_drivers::actuator::Drive;

@@ -117,7 +117,7 @@ mod params;
 pub use detect::{BottomSearch, Debounce};
 pub use params::{HopParams, HopThrust, MAX_DEBOUNCE_SAMPLES, MAX_LATENCY_STEPS, MAX_THRUST_STEPS};
 
-use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::fixed_rate::{reply_from_fields, Fault, FixedRate, Mode, Telemetry};
 use crate::freshness::Freshness;
 use crate::hop::{EnergyServoThrust, StancePhase};
 use crate::math::Real;
@@ -201,19 +201,7 @@ pub struct HopCommand {
     pub fault: Fault,
 }
 
-impl Reply for HopCommand {
-    fn seq(&self) -> u32 {
-        self.seq
-    }
-
-    fn mode(&self) -> Mode {
-        self.mode
-    }
-
-    fn fault(&self) -> Fault {
-        self.fault
-    }
-}
+reply_from_fields!(HopCommand);
 
 /// The fixed-rate hopper thrust controller.
 #[derive(Clone, Debug)]
@@ -249,44 +237,6 @@ pub struct HopController {
 }
 
 impl HopController {
-    /// A controller; the error names the first invalid parameter.
-    #[inline]
-    pub fn new(params: HopParams) -> Result<Self, ParamError> {
-        params.validate()?;
-        // validated above, thrust fields included
-        let law = params.law_of_checked()?;
-        let g = params.gravity_mps2;
-        let lag_m =
-            params.touchdown_compression_m.max_r(0.0) + params.liftoff_compression_m.max_r(0.0);
-        Ok(Self {
-            params,
-            law,
-            delta_steps: params.thrust_duration_s / params.dt_s,
-            latency_steps: params.sensor_latency_s / params.dt_s,
-            energy_per_s2: 0.125 * g * g,
-            threshold_s2: 2.0 * lag_m / g,
-            step: u32::MAX,
-            phase: StancePhase::Flight,
-            armed: false,
-            touchdown: Debounce::default(),
-            liftoff: Debounce::default(),
-            bottom: BottomSearch::start(0.0, 0),
-            thrust_left: 0,
-            stance_thrust_mps2: 0.0,
-            liftoff_step: None,
-            predicted: None,
-            apex_m: f32::NEG_INFINITY,
-            energy_jpkg: f32::NAN,
-            seq: Freshness::new(),
-            samples: [(0.0, 0); 2],
-        })
-    }
-
-    /// The parameters this controller runs with.
-    pub fn params(&self) -> &HopParams {
-        &self.params
-    }
-
     /// The detected phase.
     pub fn phase(&self) -> StancePhase {
         self.phase
@@ -305,52 +255,6 @@ impl HopController {
     /// The thrust of the current (or last) stance, m/s^2.
     pub fn stance_thrust_mps2(&self) -> f32 {
         self.stance_thrust_mps2
-    }
-
-    /// Telemetry fields the core knows (the firmware adds timing and link counts): estimate
-    /// slot 0 the last leg compression sample, m; slot 1 its rate, m/s, the difference of
-    /// the last two fresh samples over the time between them (0 before two); slot 2 the
-    /// touchdown energy estimated at the last touchdown, J/kg (0 before the first; the
-    /// phase is in the command). Valid while armed ([`Mode::Track`]). Computed here, not in
-    /// the step, so the step's budget does not pay for it.
-    pub fn telemetry(&self) -> Telemetry {
-        let [(c0, s0), (c1, s1)] = self.samples;
-        let periods = s1.wrapping_sub(s0);
-        let rate = if periods == 0 {
-            0.0
-        } else {
-            (c1 - c0) / (periods as f32 * self.params.dt_s)
-        };
-        let energy = if self.energy_jpkg.is_finite() {
-            self.energy_jpkg
-        } else {
-            0.0
-        };
-        Telemetry::with_estimate(&[c1, rate, energy], self.armed)
-    }
-
-    /// One control period: the command for `frame`.
-    #[inline(never)]
-    pub fn step(&mut self, frame: &HopFrame) -> HopCommand {
-        self.step = self.step.wrapping_add(1);
-        match self.check(frame) {
-            Err(fault) => self.enter_safe(frame.seq, fault),
-            Ok(fresh) => {
-                if fresh {
-                    self.on_sample(frame);
-                }
-                self.due_bottom();
-                self.command(frame.seq)
-            }
-        }
-    }
-
-    /// The safe command for an external fault (e.g. the firmware's link timeout); one
-    /// control period passes.
-    #[inline(never)]
-    pub fn safe(&mut self, seq: u32, fault: Fault) -> HopCommand {
-        self.step = self.step.wrapping_add(1);
-        self.enter_safe(seq, fault)
     }
 
     fn enter_safe(&mut self, seq: u32, fault: Fault) -> HopCommand {
@@ -531,25 +435,88 @@ impl FixedRate for HopController {
     /// BENCHMARKS.md, "Hopper controller on the MCU").
     const STEP_INSTRUCTION_BUDGET: u32 = 300;
 
+    /// A controller; the error names the first invalid parameter.
     #[inline]
     fn new(params: HopParams) -> Result<Self, ParamError> {
-        HopController::new(params)
+        params.validate()?;
+        // validated above, thrust fields included
+        let law = params.law_of_checked()?;
+        let g = params.gravity_mps2;
+        let lag_m =
+            params.touchdown_compression_m.max_r(0.0) + params.liftoff_compression_m.max_r(0.0);
+        Ok(Self {
+            params,
+            law,
+            delta_steps: params.thrust_duration_s / params.dt_s,
+            latency_steps: params.sensor_latency_s / params.dt_s,
+            energy_per_s2: 0.125 * g * g,
+            threshold_s2: 2.0 * lag_m / g,
+            step: u32::MAX,
+            phase: StancePhase::Flight,
+            armed: false,
+            touchdown: Debounce::default(),
+            liftoff: Debounce::default(),
+            bottom: BottomSearch::start(0.0, 0),
+            thrust_left: 0,
+            stance_thrust_mps2: 0.0,
+            liftoff_step: None,
+            predicted: None,
+            apex_m: f32::NEG_INFINITY,
+            energy_jpkg: f32::NAN,
+            seq: Freshness::new(),
+            samples: [(0.0, 0); 2],
+        })
     }
 
+    /// The parameters this controller runs with.
     fn params(&self) -> &HopParams {
-        HopController::params(self)
+        &self.params
     }
 
+    /// One control period: the command for `frame`.
+    #[inline(never)]
     fn step(&mut self, frame: &HopFrame) -> HopCommand {
-        HopController::step(self, frame)
+        self.step = self.step.wrapping_add(1);
+        match self.check(frame) {
+            Err(fault) => self.enter_safe(frame.seq, fault),
+            Ok(fresh) => {
+                if fresh {
+                    self.on_sample(frame);
+                }
+                self.due_bottom();
+                self.command(frame.seq)
+            }
+        }
     }
 
+    /// The safe command for an external fault (e.g. the firmware's link timeout); one
+    /// control period passes.
+    #[inline(never)]
     fn safe(&mut self, seq: u32, fault: Fault) -> HopCommand {
-        HopController::safe(self, seq, fault)
+        self.step = self.step.wrapping_add(1);
+        self.enter_safe(seq, fault)
     }
 
+    /// Telemetry fields the core knows (the firmware adds timing and link counts): estimate
+    /// slot 0 the last leg compression sample, m; slot 1 its rate, m/s, the difference of
+    /// the last two fresh samples over the time between them (0 before two); slot 2 the
+    /// touchdown energy estimated at the last touchdown, J/kg (0 before the first; the
+    /// phase is in the command). Valid while armed ([`Mode::Track`]). Computed here, not in
+    /// the step, so the step's budget does not pay for it.
     fn telemetry(&self) -> Telemetry {
-        HopController::telemetry(self)
+        let [(c0, s0), (c1, s1)] = self.samples;
+        let periods = s1.wrapping_sub(s0);
+        let rate = if periods == 0 {
+            0.0
+        } else {
+            (c1 - c0) / (periods as f32 * self.params.dt_s)
+        };
+        let energy = if self.energy_jpkg.is_finite() {
+            self.energy_jpkg
+        } else {
+            0.0
+        };
+        Telemetry::with_estimate(&[c1, rate, energy], self.armed)
     }
 }
 

@@ -1,6 +1,7 @@
 //! Unit tests of the hopper controller against closed-form sampled trajectories.
 
 use super::*;
+use crate::fixed_rate::Reply;
 
 /// A periodic hop in closed form (no thrust: the trajectory does not react to the valve):
 /// flight of 2 v / g, then a stance that is half a period of an undamped spring,

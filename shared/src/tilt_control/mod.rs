@@ -85,7 +85,7 @@ pub mod sincos;
 
 use crate::checks::Checks;
 use crate::fields;
-use crate::fixed_rate::{Fault, FixedRate, Mode, Reply, Telemetry};
+use crate::fixed_rate::{reply_from_fields, Fault, FixedRate, Mode, Telemetry};
 use crate::freshness::Freshness;
 use crate::math::Real;
 use crate::params::ParamError;
@@ -625,19 +625,7 @@ pub struct TiltCommand {
     pub plan: PlanStatus,
 }
 
-impl Reply for TiltCommand {
-    fn seq(&self) -> u32 {
-        self.seq
-    }
-
-    fn mode(&self) -> Mode {
-        self.mode
-    }
-
-    fn fault(&self) -> Fault {
-        self.fault
-    }
-}
+reply_from_fields!(TiltCommand);
 
 /// The plan both axes follow: the cubics' accelerations a(t) = a0 + jerk t from its start,
 /// until the impact `tau_s` after it.
@@ -793,61 +781,6 @@ pub struct TiltControllerWith<T: SinCos> {
 }
 
 impl<T: SinCos> TiltControllerWith<T> {
-    /// A controller; the error names the first invalid parameter.
-    #[inline]
-    pub fn new(params: TiltParams) -> Result<Self, ParamError> {
-        params.validate()?;
-        let p = &params;
-        let law = LawConstants {
-            kappa: p.kappa,
-            kappa_rate_s: p.kappa_rate_s,
-            kappa_x_pm: p.kappa_x_pm,
-            kappa_xdot_spm: p.kappa_xdot_spm,
-            kappa_e_s2pm2: p.kappa_e_s2pm2,
-            // eta* = G apex and eq. 22's (1 - e)/(1 + e), as [`crate::tilt::EnergyFeedback`] computes
-            // them (the test `law_constants_are_the_energy_feedbacks` checks it to the bit);
-            // the parameters are validated above, so its checks are not repeated here
-            target_energy_jpkg: p.gravity_mps2 * p.target_apex_m,
-            compensation: (1.0 - p.restitution) / (1.0 + p.restitution),
-            gravity_mps2: p.gravity_mps2,
-            l_m: p.l_m,
-            impact_height_m: p.impact_height_m,
-        };
-        let model = ImpactModel {
-            rho_m: p.rho_m,
-            l_m: p.l_m,
-            restitution: p.restitution,
-        };
-        let (t, s) = (&p.tilt, &p.stroke);
-        let tilt = Axis::new(t.limits(), t.kp_per_s2, t.kd_per_s, t.home_rad, p.dt_s);
-        let stroke = Axis::new(s.limits(), s.kp_per_s2, s.kd_per_s, s.home_m, p.dt_s);
-        Ok(Self {
-            params,
-            law,
-            geo: ContactGeometry::new(p.gravity_mps2, p.l_m),
-            // validated with the rest of the parameters above
-            estimator: FlightEstimator::new_validated(p.estimator, model, p.dt_s, p.gravity_mps2),
-            tilt,
-            stroke,
-            bounds: Bounds::new(p),
-            pipeline: Pipeline::new(),
-            active: None,
-            unreachable: false,
-            table: [
-                PaddleState::new(t.home_rad, 0.0),
-                PaddleState::new(s.home_m, 0.0),
-            ],
-            seq: Freshness::new(),
-            mode: Mode::Hold,
-            _sin_cos: PhantomData,
-        })
-    }
-
-    /// The parameters this controller runs with.
-    pub fn params(&self) -> &TiltParams {
-        &self.params
-    }
-
     /// The body's estimated flight state now (latency compensated).
     pub fn estimate(&self) -> BodyFlight {
         self.estimator.now()
@@ -861,17 +794,6 @@ impl<T: SinCos> TiltControllerWith<T> {
     /// The latest table target (valid once a plan has been made).
     pub fn target(&self) -> ImpactTarget {
         self.pipeline.target
-    }
-
-    /// Telemetry fields the core knows: estimate slot 0 the body's centre-of-mass height y,
-    /// m, slot 1 its vertical velocity y', m/s, slot 2 its angle theta, rad (latency
-    /// compensated, [`FlightEstimator::now`]); valid while the flight estimate is.
-    pub fn telemetry(&self) -> Telemetry {
-        let now = self.estimator.now();
-        Telemetry::with_estimate(
-            &[now.y_m, now.y_dot_mps, now.theta_rad],
-            self.estimator.valid(),
-        )
     }
 
     /// One control period: the command for `frame`.
@@ -1215,13 +1137,59 @@ impl<T: SinCos> FixedRate for TiltControllerWith<T> {
     /// and marked there (libm's `sinf` alone takes ~1350).
     const STEP_INSTRUCTION_BUDGET: u32 = 600;
 
+    /// A controller; the error names the first invalid parameter.
     #[inline]
     fn new(params: TiltParams) -> Result<Self, ParamError> {
-        TiltControllerWith::new(params)
+        params.validate()?;
+        let p = &params;
+        let law = LawConstants {
+            kappa: p.kappa,
+            kappa_rate_s: p.kappa_rate_s,
+            kappa_x_pm: p.kappa_x_pm,
+            kappa_xdot_spm: p.kappa_xdot_spm,
+            kappa_e_s2pm2: p.kappa_e_s2pm2,
+            // eta* = G apex and eq. 22's (1 - e)/(1 + e), as [`crate::tilt::EnergyFeedback`] computes
+            // them (the test `law_constants_are_the_energy_feedbacks` checks it to the bit);
+            // the parameters are validated above, so its checks are not repeated here
+            target_energy_jpkg: p.gravity_mps2 * p.target_apex_m,
+            compensation: (1.0 - p.restitution) / (1.0 + p.restitution),
+            gravity_mps2: p.gravity_mps2,
+            l_m: p.l_m,
+            impact_height_m: p.impact_height_m,
+        };
+        let model = ImpactModel {
+            rho_m: p.rho_m,
+            l_m: p.l_m,
+            restitution: p.restitution,
+        };
+        let (t, s) = (&p.tilt, &p.stroke);
+        let tilt = Axis::new(t.limits(), t.kp_per_s2, t.kd_per_s, t.home_rad, p.dt_s);
+        let stroke = Axis::new(s.limits(), s.kp_per_s2, s.kd_per_s, s.home_m, p.dt_s);
+        Ok(Self {
+            params,
+            law,
+            geo: ContactGeometry::new(p.gravity_mps2, p.l_m),
+            // validated with the rest of the parameters above
+            estimator: FlightEstimator::new_validated(p.estimator, model, p.dt_s, p.gravity_mps2),
+            tilt,
+            stroke,
+            bounds: Bounds::new(p),
+            pipeline: Pipeline::new(),
+            active: None,
+            unreachable: false,
+            table: [
+                PaddleState::new(t.home_rad, 0.0),
+                PaddleState::new(s.home_m, 0.0),
+            ],
+            seq: Freshness::new(),
+            mode: Mode::Hold,
+            _sin_cos: PhantomData,
+        })
     }
 
+    /// The parameters this controller runs with.
     fn params(&self) -> &TiltParams {
-        TiltControllerWith::params(self)
+        &self.params
     }
 
     fn step(&mut self, frame: &TiltFrame) -> TiltCommand {
@@ -1232,8 +1200,15 @@ impl<T: SinCos> FixedRate for TiltControllerWith<T> {
         T::safe(self, seq, fault)
     }
 
+    /// Telemetry fields the core knows: estimate slot 0 the body's centre-of-mass height y,
+    /// m, slot 1 its vertical velocity y', m/s, slot 2 its angle theta, rad (latency
+    /// compensated, [`FlightEstimator::now`]); valid while the flight estimate is.
     fn telemetry(&self) -> Telemetry {
-        TiltControllerWith::telemetry(self)
+        let now = self.estimator.now();
+        Telemetry::with_estimate(
+            &[now.y_m, now.y_dot_mps, now.theta_rad],
+            self.estimator.valid(),
+        )
     }
 }
 
