@@ -115,7 +115,7 @@ mod tests {
         assert!(parse_set("a..b=1").is_err());
     }
 
-    /// Finding 14 (issue 22): an integer beyond i64 says so, not "invalid type: string".
+    /// An integer beyond i64 says so, not "invalid type: string".
     #[test]
     fn an_integer_beyond_i64_is_refused_as_out_of_range() {
         for raw in [

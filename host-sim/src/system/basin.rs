@@ -1,4 +1,4 @@
-//! What a system that draws basin maps declares ([`Basins`], issue 24 item 3): how one run's
+//! What a system that draws basin maps declares ([`Basins`]): how one run's
 //! outcome is classified, and whether a point lies in a certified region.
 
 use super::System;

@@ -1,4 +1,4 @@
-//! `dexter basin`, for every system that classifies its runs ([`Basins`], issue 24 item 3):
+//! `dexter basin`, for every system that classifies its runs ([`Basins`]):
 //! every point of a two-key grid (usually initial conditions) is run to its end and
 //! classified; the points are evaluated on every core and written in serial order. A
 //! larger map runs in shards (`--shard K/N`, [`crate::shard`]) merged by `dexter merge`

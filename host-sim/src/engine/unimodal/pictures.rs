@@ -1,4 +1,4 @@
-//! The pictures of a certificate (issue 24 item 4): the return map on its invariant
+//! The pictures of a certificate: the return map on its invariant
 //! interval with the diagonal and a cobweb from a few starts, the Schwarzian along the
 //! interval with the ranges interval arithmetic proved, and a family's bifurcation diagram
 //! with the located doublings marked. Each is `{dir}/{stem}-*.svg` and `.png`.

@@ -400,7 +400,7 @@ fn check(part: &Part, setup: &Setup, pose: &Pose, fence: &Fence, t: f64) -> Opti
 mod failure_words {
     use super::Failure;
 
-    /// Finding 14 (issue 22): a failure reads as words with its time, not as a Debug dump.
+    /// A failure reads as words with its time, not as a Debug dump.
     #[test]
     fn failures_read_as_words() {
         for (f, words) in [

@@ -456,7 +456,7 @@ mod tests {
         }
     }
 
-    /// Finding 12 (issue 22): the plan freeze is the core's 0.03 s where that fits (the
+    /// The plan freeze is the core's 0.03 s where that fits (the
     /// default table), longer where the latency and the planning cycle need it, and always
     /// one the core accepts.
     #[test]

@@ -114,7 +114,7 @@ fn worst(e: &evaluate::Eval) -> (f64, Option<Kind>) {
         })
 }
 
-/// The planning's progress on a terminal (issue 22, finding 10): the starts done of all
+/// The planning's progress on a terminal: the starts done of all
 /// (each start's solves capped by `planner.max_evaluations` per refinement round), and the
 /// program evaluations so far, which move while a start runs. Drawn only from the main
 /// thread: a sweep plans on rayon's workers and shows its own bar over the points.
