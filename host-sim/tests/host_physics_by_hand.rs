@@ -234,6 +234,20 @@ fn a_take_off_whose_return_underflows_is_not_an_immediate_re_impact() {
     assert_eq!((c.time_s, c.grazing), (0.5, false));
 }
 
+/// A subnormal take-off speed still comes back at 2 u / g: u = 2^-1060 m/s against
+/// 2 c2 = -8 m/s^2 returns at 2^-1062 s exactly (representable: the smallest subnormal is
+/// 2^-1074). Squaring u underflows to 0, so the discriminant formula gave half of that.
+#[test]
+fn a_subnormal_take_off_returns_after_the_ballistic_time() {
+    let u = 2f64.powi(-1060);
+    assert!(u > 0.0 && !u.is_normal());
+    let c = first_contact(0.0, u, -4.0, 1.0).expect("the return");
+    assert_eq!(c.time_s, 2f64.powi(-1062));
+    // and a take-off too fast to square (u^2 overflows) as well: 2^600 / 4 = 2^598 s
+    let c = first_contact(0.0, 2f64.powi(600), -4.0, f64::MAX).expect("the return");
+    assert_eq!(c.time_s, 2f64.powi(598));
+}
+
 /// The paddle's velocity over a segment is v + a t (its height's derivative).
 #[test]
 fn the_paddles_velocity_is_its_start_velocity_plus_acceleration_times_time() {
@@ -421,5 +435,65 @@ fn a_period_two_orbit_after_a_transient_has_period_two() {
             .map(|k| [1.0, 1.5][k % 2] + 0.3 * 0.5f64.powi(k as i32))
             .collect();
         assert_eq!(settled_period(&v, 8, tol), Some(2), "n = {n}");
+    }
+}
+
+/// The gap `c0 + c1 t + c2 t^2` at a double `t`, exactly (every f64 is a dyadic rational).
+fn exact_gap(c0: f64, c1: f64, c2: f64, t: f64) -> num_rational::BigRational {
+    let q = |x: f64| num_rational::BigRational::from_float(x).expect("finite");
+    q(c0) + q(c1) * q(t) + q(c2) * q(t) * q(t)
+}
+
+/// The time of first contact of a separated, closing gap is its exact root to within one
+/// ulp: the exact gap (rational arithmetic, independent of the code's rounding) changes
+/// sign between the doubles on either side of the answer. In each case the closed-form root
+/// alone is two or more ulps off, so the one Newton step that polishes it is what gets it
+/// there (found by a search over random closing gaps against the exact gap).
+#[test]
+fn a_separated_gaps_first_contact_is_its_exact_root_within_an_ulp() {
+    for (c0, c1, c2) in [
+        (
+            0.10609863217664363,
+            -0.10464230983699695,
+            -6.974701354411441,
+        ),
+        (0.8814757455036015, -0.4598314184580483, -3.3700422171601874),
+        (
+            0.08429224842461425,
+            -0.5476335247081249,
+            -3.9151087955132313,
+        ),
+        (1.35696116043066, -3.7843874823911072, -3.75608532459516),
+        (0.6216985775224396, -4.920863474458172, -5.568388076304782),
+    ] {
+        let t = first_contact(c0, c1, c2, 1.0).expect("a contact").time_s;
+        let before = sign_of(&exact_gap(c0, c1, c2, t.next_down()));
+        let after = sign_of(&exact_gap(c0, c1, c2, t.next_up()));
+        assert!(
+            before >= 0 && after <= 0,
+            "gap ({c0}, {c1}, {c2}): t = {t} is not within an ulp of the root"
+        );
+        // and the unpolished closed form (q / c2 or c0 / q) is not, which is what makes
+        // this a test of the polish
+        let q = -0.5 * (c1 - (c1 * c1 - 4.0 * c0 * c2).sqrt());
+        let raw = (q / c2).min(c0 / q);
+        let raw = if raw > 0.0 { raw } else { (q / c2).max(c0 / q) };
+        let (b, a) = (
+            sign_of(&exact_gap(c0, c1, c2, raw.next_down())),
+            sign_of(&exact_gap(c0, c1, c2, raw.next_up())),
+        );
+        assert!(
+            !(b >= 0 && a <= 0),
+            "({c0}, {c1}, {c2}): the closed form is already there"
+        );
+    }
+}
+
+/// -1, 0 or 1: the sign of an exact rational (its denominator is kept positive).
+fn sign_of(x: &num_rational::BigRational) -> i32 {
+    match x.numer().sign() {
+        num_bigint::Sign::Minus => -1,
+        num_bigint::Sign::NoSign => 0,
+        num_bigint::Sign::Plus => 1,
     }
 }

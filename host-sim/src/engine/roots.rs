@@ -114,10 +114,6 @@ pub fn first_contact(c0: f64, c1: f64, c2: f64, h: f64) -> Option<Contact> {
     None
 }
 
-/// Where `sqrt(c1 * c1) == c1` holds exactly for `c1 > 0` (the square neither overflows
-/// nor falls below the normal range), m/s.
-const EXACT_SQUARE_MPS: (f64, f64) = (1e-150, 1e150);
-
 /// How far, relative to the size of the gap's terms over the window, a lower bound of the
 /// gap must stay above zero for [`clearly_apart`] to answer without the roots: 1e-9 is
 /// some 4.5e6 ulps, far beyond the grazing allowance ([`GRAZE_ULPS`]) and the rounding of
@@ -145,11 +141,14 @@ pub fn clearly_apart(c0: f64, c1: f64, c2: f64, h: f64) -> bool {
 
 /// The positive root of `c0 + c1 t + c2 t^2` for `c0 <= 0` tiny, `c1 > 0`, `c2 < 0`.
 fn second_root_from_touch(c0: f64, c1: f64, c2: f64) -> f64 {
-    if c0 == 0.0 && (EXACT_SQUARE_MPS.0..EXACT_SQUARE_MPS.1).contains(&c1) {
+    if c0 == 0.0 {
         // a take-off from the surface (every bounce on a table or the ideal mirror): the
-        // discriminant is c1^2, whose correctly rounded square root is c1 itself in binary
-        // floating point (no overflow or underflow), so q = -c1 exactly and the square root,
-        // the longest step of the impact-to-impact chain, is not needed
+        // roots are 0 and -c1/c2 exactly, so the correctly rounded quotient is the answer at
+        // any scale. It is also what the general formula gives wherever c1^2 neither
+        // overflows nor underflows (the square root of c1^2 is then c1 exactly, q = -c1);
+        // beyond that range the formula is wrong (a subnormal c1 squares to 0 and halves
+        // the return time), and the square root, the longest step of the impact-to-impact
+        // chain, is not needed either way
         return -c1 / c2;
     }
     let disc = (c1 * c1 - 4.0 * c0 * c2).max(0.0);
@@ -297,8 +296,9 @@ mod tests {
             }
         }
 
-        /// A take-off from the surface (c0 = 0) is answered without the square root, bit
-        /// for bit as with it (the square root of c1^2 is c1 exactly).
+        /// A take-off from the surface (c0 = 0) is answered without the square root: the
+        /// far root -c1/c2 at every scale, bit for bit the general formula's where that is
+        /// exact (the square root of a normal c1^2 is c1 exactly).
         #[test]
         fn take_off_roots_match_the_square_root(
             mantissa in 1.0f64..2.0,
@@ -309,8 +309,15 @@ mod tests {
             let c1 = mantissa * 2f64.powi(exp);
             let c0 = if negative_zero { -0.0 } else { 0.0 };
             let c2 = -a;
-            let q = -0.5 * (c1 + (c1 * c1 - 4.0 * c0 * c2).max(0.0).sqrt());
-            prop_assert_eq!(second_root_from_touch(c0, c1, c2).to_bits(), (q / c2).to_bits());
+            let t = second_root_from_touch(c0, c1, c2);
+            // the roots of c1 t + c2 t^2 are 0 and -c1/c2: the correctly rounded quotient
+            prop_assert_eq!(t.to_bits(), (-c1 / c2).to_bits());
+            // and where c1^2 is normal and finite, bit for bit the general formula's root
+            let square = c1 * c1;
+            if square.is_normal() && square.is_finite() {
+                let q = -0.5 * (c1 + (square - 4.0 * c0 * c2).max(0.0).sqrt());
+                prop_assert_eq!(t.to_bits(), (q / c2).to_bits());
+            }
         }
 
         /// Tangent gaps (exact double roots, built from the root) are never missed.
