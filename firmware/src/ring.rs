@@ -116,4 +116,33 @@ impl<const N: usize> Consumer<'_, N> {
     pub fn is_empty(&self) -> bool {
         self.ring.head.load(Ordering::Relaxed) == self.ring.tail.load(Ordering::Acquire)
     }
+
+    /// Fill `buf` with the waiting bytes, at least one: a blocking `embedded_io::Read::read`
+    /// of a link fed by a receive interrupt. While the ring is empty it sleeps in `wfi` if
+    /// `sleep` (else it spins). Returns 0 only for an empty `buf`.
+    pub fn read_waiting(&mut self, buf: &mut [u8], sleep: bool) -> usize {
+        if buf.is_empty() {
+            return 0;
+        }
+        loop {
+            let mut n = 0;
+            for slot in buf.iter_mut() {
+                let Some(b) = self.pop() else { break };
+                *slot = b;
+                n += 1;
+            }
+            if n > 0 {
+                return n;
+            }
+            // Masked, so a byte that arrives between the check and `wfi` still wakes it
+            // (a pending interrupt ends `wfi` even while masked).
+            if sleep {
+                cortex_m::interrupt::free(|_| {
+                    if self.is_empty() {
+                        cortex_m::asm::wfi();
+                    }
+                });
+            }
+        }
+    }
 }

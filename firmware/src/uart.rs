@@ -93,26 +93,7 @@ impl<T: NbWrite<u8>> embedded_io::ErrorType for RingLink<T> {
 impl<T: NbWrite<u8>> embedded_io::Read for RingLink<T> {
     /// Blocks, sleeping in `wfi`, until at least one byte arrived.
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
-        if buf.is_empty() {
-            return Ok(0);
-        }
-        loop {
-            let mut n = 0;
-            for slot in buf.iter_mut() {
-                let Some(b) = self.rx.pop() else { break };
-                *slot = b;
-                n += 1;
-            }
-            if n > 0 {
-                return Ok(n);
-            }
-            // Masked, so a byte that arrives between the check and `wfi` still wakes it.
-            cortex_m::interrupt::free(|_| {
-                if self.rx.is_empty() {
-                    cortex_m::asm::wfi();
-                }
-            });
-        }
+        Ok(self.rx.read_waiting(buf, true))
     }
 }
 

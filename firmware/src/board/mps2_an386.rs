@@ -119,31 +119,10 @@ impl embedded_io::ErrorType for Uart0 {
 }
 
 impl embedded_io::Read for Uart0 {
-    /// Blocks (sleeping in `wfi`) until at least one byte arrived.
+    /// Blocks (sleeping in `wfi` if [`SLEEP_WHILE_WAITING`]) until at least one byte
+    /// arrived.
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
-        if buf.is_empty() {
-            return Ok(0);
-        }
-        loop {
-            let mut n = 0;
-            for slot in buf.iter_mut() {
-                let Some(b) = self.rx.pop() else { break };
-                *slot = b;
-                n += 1;
-            }
-            if n > 0 {
-                return Ok(n);
-            }
-            // Sleep with interrupts masked so a byte arriving between the check and the
-            // `wfi` still wakes us (a pending interrupt ends `wfi` even while masked).
-            if SLEEP_WHILE_WAITING {
-                cortex_m::interrupt::free(|_| {
-                    if self.rx.is_empty() {
-                        cortex_m::asm::wfi();
-                    }
-                });
-            }
-        }
+        Ok(self.rx.read_waiting(buf, SLEEP_WHILE_WAITING))
     }
 }
 
