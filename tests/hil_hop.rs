@@ -168,8 +168,14 @@ fn energy_servo_with_a_noisy_sensor_in_hil_equals_sil_bit_for_bit() {
 #[test]
 fn the_hopper_step_is_within_its_budget_on_every_path() {
     let elf = firmware();
-    let (step, cycles) = static_worst_case(&elf, "dexter_core::hop_control::HopController::step");
-    let (safe, _) = static_worst_case(&elf, "dexter_core::hop_control::HopController::safe");
+    let (step, cycles) = static_worst_case(
+        &elf,
+        "<dexter_core::hop_control::HopController as dexter_core::fixed_rate::FixedRate>::step",
+    );
+    let (safe, _) = static_worst_case(
+        &elf,
+        "<dexter_core::hop_control::HopController as dexter_core::fixed_rate::FixedRate>::safe",
+    );
     eprintln!("hopper step: static worst case {step} instructions, {cycles} cycles; safe {safe}");
     assert!(
         step + 3 <= HOP_BUDGET,

@@ -161,11 +161,11 @@ fn the_tilt_step_is_within_its_budget_on_every_path() {
     let elf = firmware();
     let (step, cycles) = static_worst_case(
         &elf,
-        "dexter_core::tilt_control::TiltControllerWith$LT$T$GT$::step",
+        "dexter_core::tilt_control::TiltControllerWith<T>::step",
     );
     let (safe, _) = static_worst_case(
         &elf,
-        "dexter_core::tilt_control::TiltControllerWith$LT$T$GT$::safe",
+        "dexter_core::tilt_control::TiltControllerWith<T>::safe",
     );
     eprintln!("tilt step: static worst case {step} instructions, {cycles} cycles; safe {safe}");
     assert!(
