@@ -1,5 +1,7 @@
 //! A fixed-capacity single-producer single-consumer byte ring: the UART receive interrupt
-//! pushes, the main loop pops. Lock free (two atomic indices), no allocation.
+//! pushes, the main loop pops. `heapless::spsc`'s lock-free queue (two atomic indices, no
+//! allocation), with what a receive path adds: a count of the bytes dropped when it was full,
+//! and ends that can be taken from a shared `static` once.
 //!
 //! The single-producer, single-consumer contract is in the types: the ring itself offers
 //! no way to push or pop. [`ByteRing::split`] hands out the one [`Producer`] and the one
@@ -9,21 +11,19 @@
 
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use heapless::spsc;
 
-/// SPSC byte ring with `N` slots (`N` a power of two; one slot is kept free).
+/// SPSC byte ring with `N` slots (`N` a power of two; one slot is kept free, so it holds
+/// `N - 1` bytes).
 pub struct ByteRing<const N: usize> {
-    buf: UnsafeCell<[u8; N]>,
-    head: AtomicUsize,
-    tail: AtomicUsize,
+    queue: UnsafeCell<spsc::Queue<u8, N>>,
     dropped: AtomicUsize,
     split: AtomicBool,
 }
 
-// Safety: the buffer is only reached through the one `Producer` and the one `Consumer` that
-// `split` hands out once (both need `&mut self`). The producer writes slot `tail` only,
-// before publishing it with a release store of `tail`; the consumer reads slot `head` only,
-// after an acquire load of `tail` shows it published, and frees it with a release store of
-// `head`. No slot is ever accessed from both sides at once.
+// Safety: the queue is only reached through the one `Producer` and the one `Consumer` that
+// `split` hands out once; `heapless::spsc` makes those two ends safe to use from two
+// contexts at once (the producer owns the tail index, the consumer the head).
 unsafe impl<const N: usize> Sync for ByteRing<N> {}
 
 impl<const N: usize> Default for ByteRing<N> {
@@ -33,17 +33,11 @@ impl<const N: usize> Default for ByteRing<N> {
 }
 
 impl<const N: usize> ByteRing<N> {
-    const MASK: usize = {
-        assert!(N.is_power_of_two() && N >= 2);
-        N - 1
-    };
-
     /// An empty ring.
     pub const fn new() -> Self {
+        const { assert!(N.is_power_of_two() && N >= 2) };
         Self {
-            buf: UnsafeCell::new([0; N]),
-            head: AtomicUsize::new(0),
-            tail: AtomicUsize::new(0),
+            queue: UnsafeCell::new(spsc::Queue::new()),
             dropped: AtomicUsize::new(0),
             split: AtomicBool::new(false),
         }
@@ -54,12 +48,16 @@ impl<const N: usize> ByteRing<N> {
         if self.split.swap(true, Ordering::AcqRel) {
             return None;
         }
-        Some((Producer { ring: self }, Consumer { ring: self }))
-    }
-
-    /// Pointer to slot `index & MASK` (always inside the buffer).
-    fn slot(&self, index: usize) -> *mut u8 {
-        self.buf.get().cast::<u8>().wrapping_add(index & Self::MASK)
+        // Safety: the flag above lets this run once, so this is the only `&mut` to the
+        // queue ever made; after it the queue is reached only through the two ends.
+        let (tx, rx) = unsafe { &mut *self.queue.get() }.split();
+        Some((
+            Producer {
+                tx,
+                dropped: &self.dropped,
+            },
+            Consumer { rx },
+        ))
     }
 
     /// Bytes lost because the ring was full.
@@ -70,51 +68,33 @@ impl<const N: usize> ByteRing<N> {
 
 /// The writing end (the receive interrupt).
 pub struct Producer<'a, const N: usize> {
-    ring: &'a ByteRing<N>,
+    tx: spsc::Producer<'a, u8>,
+    dropped: &'a AtomicUsize,
 }
 
 impl<const N: usize> Producer<'_, N> {
     /// Append a byte; counts it as dropped when the ring is full.
     pub fn push(&mut self, byte: u8) {
-        let ring = self.ring;
-        let tail = ring.tail.load(Ordering::Relaxed);
-        let next = (tail + 1) & ByteRing::<N>::MASK;
-        if next == ring.head.load(Ordering::Acquire) {
-            ring.dropped.fetch_add(1, Ordering::Relaxed);
-            return;
+        if self.tx.enqueue(byte).is_err() {
+            self.dropped.fetch_add(1, Ordering::Relaxed);
         }
-        // Safety: `tail & MASK < N`, so the pointer is in the buffer; that one slot is the
-        // producer's until `tail` is published (see `Sync`). Only the slot is accessed, never
-        // the whole array, so the consumer's concurrent read of another slot does not alias.
-        unsafe { ring.slot(tail).write(byte) };
-        ring.tail.store(next, Ordering::Release);
     }
 }
 
 /// The reading end (the main loop).
 pub struct Consumer<'a, const N: usize> {
-    ring: &'a ByteRing<N>,
+    rx: spsc::Consumer<'a, u8>,
 }
 
 impl<const N: usize> Consumer<'_, N> {
     /// Take the oldest byte.
     pub fn pop(&mut self) -> Option<u8> {
-        let ring = self.ring;
-        let head = ring.head.load(Ordering::Relaxed);
-        if head == ring.tail.load(Ordering::Acquire) {
-            return None;
-        }
-        // Safety: `head & MASK < N`, so the pointer is in the buffer; slot `head` was
-        // published by the producer and is not written until `head` moves past it.
-        let byte = unsafe { ring.slot(head).read() };
-        ring.head
-            .store((head + 1) & ByteRing::<N>::MASK, Ordering::Release);
-        Some(byte)
+        self.rx.dequeue()
     }
 
     /// Whether no byte is waiting.
     pub fn is_empty(&self) -> bool {
-        self.ring.head.load(Ordering::Relaxed) == self.ring.tail.load(Ordering::Acquire)
+        !self.rx.ready()
     }
 
     /// Fill `buf` with the waiting bytes, at least one: a blocking `embedded_io::Read::read`
