@@ -334,8 +334,8 @@ impl FixedRate for ArmController {
     /// cosine), and the static worst case over every path of
     /// `<ArmController as FixedRate>::step` in the arm image as flashed, callees
     /// included (`scripts/wcet.py`, run by `scripts/test.sh` with `--max-instructions 416`),
-    /// is 415 instructions (2026-12-02; at most 416 by that check). The HIL measurement window of the size-optimised firmware adds
-    /// 8 to what it reports: 10 instructions between its two SysTick reads around the call
+    /// is 415 instructions (2026-12-02; at most 416 by that check). The HIL measurement
+    /// window of the size-optimised firmware adds 8 to what it reports: 10 instructions between its two SysTick reads around the call
     /// (argument moves, the call, the reads of the sret command; counted in the disassembly
     /// of the image's `Server::step`), less the 2 its calibration subtracts. QEMU measures
     /// up to 422 over the four shipped scenes (tests/hil_arm.rs, `--nocapture`).
