@@ -88,6 +88,10 @@ pub trait StepController<C: FixedRate = Controller> {
     fn command(&mut self, frame: &C::Frame) -> Result<C::Command, ControllerError> {
         self.step(frame).map(|out| out.command)
     }
+    /// Replace the controller by a new one of `params` (a new `Configure`): the next
+    /// frame is its first. A run that plans anew between runs of the loop (the arm's
+    /// juggle, one plan per cycle) uses it.
+    fn reconfigure(&mut self, params: C::Params) -> Result<(), ControllerError>;
 }
 
 /// A controller whose steps move a run's progress bar: every [`Paced::EVERY`] steps the bar
@@ -147,6 +151,9 @@ impl<C: FixedRate> StepController<C> for Paced<'_, C> {
         self.tick();
         self.inner.command(frame)
     }
+    fn reconfigure(&mut self, params: C::Params) -> Result<(), ControllerError> {
+        self.inner.reconfigure(params)
+    }
 }
 
 /// Software in the loop: the shared core, linked in, f32, the same code the firmware runs.
@@ -179,6 +186,10 @@ impl<C: FixedRate> StepController<C> for Sil<C> {
     #[inline]
     fn command(&mut self, frame: &C::Frame) -> Result<C::Command, ControllerError> {
         Ok(self.controller.step(frame))
+    }
+    fn reconfigure(&mut self, params: C::Params) -> Result<(), ControllerError> {
+        self.controller = C::new(params).map_err(ControllerError::Params)?;
+        Ok(())
     }
 }
 

@@ -211,7 +211,7 @@ fn an_impossible_task_says_which_constraint_failed() {
 fn the_planned_motion_brakes_to_rest_after_a_throw() {
     let sys = system(examples::THROW);
     let p = dexter_sim::model::arm::planner::plan(&sys).unwrap();
-    let m = p.motion(sys.bounds.brake_accel_radps2);
+    let m = p.motion(&sys.rest_move());
     let end = m.joint(m.duration_s());
     assert!(end.velocity_radps.abs() > 1.0, "released while moving");
     let after = m.joint(m.settled_s() + 0.1);

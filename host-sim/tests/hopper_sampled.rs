@@ -268,6 +268,12 @@ impl StepController<HopController> for Counting {
         self.steps += 1;
         self.inner.step(frame)
     }
+    fn reconfigure(
+        &mut self,
+        params: dexter_core::hop_control::HopParams,
+    ) -> Result<(), ControllerError> {
+        self.inner.reconfigure(params)
+    }
 }
 
 #[test]

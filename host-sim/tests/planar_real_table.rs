@@ -4,7 +4,7 @@
 
 use dexter_core::fixed_rate::Fault;
 use dexter_core::fixed_rate::FixedRate;
-use dexter_core::tilt_control::{TiltCommand, TiltController, TiltFrame};
+use dexter_core::tilt_control::{TiltCommand, TiltController, TiltFrame, TiltParams};
 use dexter_sim::controller::{ControllerError, Sil, StepController, StepOutput};
 use dexter_sim::model::planar::real_table::{
     controller_params_for, run_real_table, RealTable, TableGap, TableRunConfig,
@@ -409,6 +409,10 @@ impl StepController<TiltController> for Flaky {
             command,
             telemetry: self.controller.telemetry(),
         })
+    }
+    fn reconfigure(&mut self, params: TiltParams) -> Result<(), ControllerError> {
+        self.controller = TiltController::new(params).map_err(ControllerError::Params)?;
+        Ok(())
     }
 }
 

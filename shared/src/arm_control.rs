@@ -10,14 +10,20 @@
 //!
 //! ## Reference
 //! For `t` in `[0, T]` the reference is the spline (angle, velocity and acceleration as
-//! feed-forward). After `T` the joint brakes at the constant `brake_accel_radps2` from the
-//! spline's end velocity `w_T` to rest (the paper's release: "the arm is maximally
-//! decelerated at the release point"), then holds:
+//! feed-forward). After `T` the joint moves to rest by the time-optimal bang-bang of
+//! [`crate::bang_bang`] under `brake_accel_radps2` and the speed limit, then holds:
+//! without `catches` it brakes from the spline's end velocity `w_T` to rest
+//! wherever that stops it (the paper's release: "the arm is maximally decelerated at the
+//! release point"),
 //!
 //! ```text
 //! theta_ref(T + s) = theta_T + w_T s - sgn(w_T) a_b s^2 / 2,   s <= |w_T| / a_b
 //! theta_ref        = theta_T + sgn(w_T) w_T^2 / (2 a_b),        afterwards
 //! ```
+//!
+//! and with it, it reaches rest at `catch_angle_rad` (sec. 2.5: "if the arm is also to catch the
+//! object, it follows a bang-bang trajectory to reach the catching configuration"). The
+//! move is computed once, by [`FixedRate::new`]; a step evaluates one of its arcs.
 //!
 //! The reference is clamped into the joint limits as the tracker does for the paddle.
 //!
@@ -44,6 +50,7 @@
 //! Every step does bounded, loop-free work (one spline segment, one polynomial cosine),
 //! allocates nothing and never panics.
 
+use crate::bang_bang::BangBang;
 use crate::bspline::{Knots, SplineSample};
 use crate::fixed_rate::{reply_from_fields, Fault, FixedRate, Mode, Telemetry};
 use crate::freshness::Freshness;
@@ -101,8 +108,16 @@ pub struct ArmParams {
     pub gravity_torque_nm: f32,
     /// Angle of the centre of mass above the link direction, rad (finite).
     pub gravity_phase_rad: f32,
-    /// Deceleration after the trajectory's end, rad/s^2 (> 0, <= accel_max).
+    /// Acceleration bound of the move to rest after the trajectory's end, rad/s^2
+    /// (> 0, <= accel_max).
     pub brake_accel_radps2: f32,
+    /// Whether the move after the trajectory goes to rest at `catch_angle_rad` (the
+    /// catching configuration, by the bang-bang move); `false` brakes to rest wherever
+    /// that stops (a throw's release).
+    pub catches: bool,
+    /// The catching joint angle, rad (finite, within the angle limits; read only when
+    /// `catches`).
+    pub catch_angle_rad: f32,
     /// Tracking error that faults the controller, rad (> 0).
     pub max_tracking_error_rad: f32,
     /// Periods without a new sample before the input counts as stale (>= 1).
@@ -129,6 +144,8 @@ impl Default for ArmParams {
             gravity_torque_nm: 25.0,
             gravity_phase_rad: 0.0,
             brake_accel_radps2: 30.0,
+            catches: false,
+            catch_angle_rad: 0.0,
             max_tracking_error_rad: 0.2,
             stale_limit_steps: 5,
             trajectory: Knots::default(),
@@ -174,7 +191,7 @@ impl ArmParams {
 
     /// The whole reference stays within the joint limits (B-spline convex hull: every
     /// control point within the angle range, every difference `|P_i+1 - P_i| / h` within
-    /// the speed limit, and the braking tail's stop angle within the range).
+    /// the speed limit, the catching angle and the move's braking stop within the range).
     fn validate_trajectory_limits(&self) -> Result<(), ParamError> {
         let l = &self.limits;
         let k = &self.trajectory;
@@ -189,13 +206,32 @@ impl ArmParams {
         if too_fast {
             return Err(ParamError::OutOfRange("trajectory.points_rad"));
         }
-        let end = k.sample(k.duration_s()).unwrap_or_default();
-        let w = end.velocity_radps;
-        let stop = end.angle_rad + w * w.abs() / (2.0 * self.brake_accel_radps2);
+        if self.catches {
+            finite("catch_angle_rad", self.catch_angle_rad)?;
+            if !range.contains(&self.catch_angle_rad) {
+                return Err(ParamError::OutOfRange("catch_angle_rad"));
+            }
+        }
+        // the move's extremes: the spline's end, the braking stop, the end angle
+        let (stop, _) = self.tail().extremes_rad();
         if !range.contains(&stop) {
             return Err(ParamError::OutOfRange("brake_accel_radps2"));
         }
         Ok(())
+    }
+
+    /// The move to rest after the trajectory ([`crate::bang_bang`]).
+    fn tail(&self) -> BangBang<f32> {
+        let k = &self.trajectory;
+        let end = k.sample(k.duration_s()).unwrap_or_default();
+        let (x, w, a) = (end.angle_rad, end.velocity_radps, self.brake_accel_radps2);
+        match self.catches {
+            false => BangBang::brake(x, w, a),
+            true => {
+                let v = self.limits.velocity_max_radps;
+                BangBang::to_rest_at(x, w, self.catch_angle_rad, a, v)
+            }
+        }
     }
 }
 
@@ -254,6 +290,8 @@ reply_from_fields!(ArmCommand);
 pub struct ArmController {
     params: ArmParams,
     tracker: Tracker,
+    /// The move to rest after the trajectory.
+    tail: BangBang<f32>,
     /// The first new sample's sequence number: the trajectory's start (0 before it).
     first_seq: u32,
     /// Whether each frame carries a new sample (the last new one is the trajectory time).
@@ -265,25 +303,20 @@ pub struct ArmController {
 }
 
 impl ArmController {
-    /// The reference at trajectory time `t_s`: the spline, then braking, then holding.
+    /// The reference at trajectory time `t_s`: the spline, then the move to rest, then
+    /// holding.
     pub fn reference(&self, t_s: f32) -> SplineSample<f32> {
         let k = &self.params.trajectory;
         let end_s = k.duration_s();
         if t_s <= end_s {
             return k.sample(t_s).unwrap_or_default();
         }
-        let end = k.sample(end_s).unwrap_or_default();
-        let a = self.params.brake_accel_radps2;
-        let w = end.velocity_radps;
-        let dir = if w < 0.0 { -1.0 } else { 1.0 };
-        let stop_s = w.abs() / a;
-        let s = (t_s - end_s).min_r(stop_s);
-        let moving = t_s - end_s < stop_s;
-        SplineSample {
-            angle_rad: end.angle_rad + w * s - 0.5 * dir * a * s * s,
-            velocity_radps: if moving { w - dir * a * s } else { 0.0 },
-            accel_radps2: if moving { -dir * a } else { 0.0 },
-        }
+        self.tail.sample(t_s - end_s)
+    }
+
+    /// Whether the reference is at rest for good at trajectory time `t_s`.
+    fn settled(&self, t_s: f32) -> bool {
+        t_s - self.params.trajectory.duration_s() >= self.tail.duration_s()
     }
 
     /// Torque for acceleration `accel_radps2` at angle `angle_rad` (inverse dynamics),
@@ -347,6 +380,7 @@ impl FixedRate for ArmController {
         let tracker = params.tracker()?;
         let start = params.trajectory.sample(0.0).unwrap_or_default();
         Ok(Self {
+            tail: params.tail(),
             params,
             tracker,
             first_seq: 0,
@@ -389,7 +423,7 @@ impl FixedRate for ArmController {
             return self.safe(frame.seq, Fault::OutOfRange);
         }
         let u = self.tracker.command(&r, &joint);
-        let done = t_s > self.params.trajectory.duration_s() && r.velocity_mps == 0.0;
+        let done = t_s > self.params.trajectory.duration_s() && self.settled(t_s);
         ArmCommand {
             seq: frame.seq,
             torque_nm: self.torque_for(u, joint.height_m),

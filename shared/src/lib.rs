@@ -18,6 +18,7 @@
 //! | [`tilt`] | kappa-tilt law, table-velocity energy feedback, stability limits | Zumel & Erdmann, eq. 3–4, 11, 16, 22–26 |
 //! | [`planar`] | planar juggler mirror law and the modified, solvable law | Rizzi & Koditschek 1994, eq. 11–16 |
 //! | [`hop`] | Raibert's fixed thrust and an energy-servo thrust | Koditschek & Bühler 1991, sec. 1.2, 3.1 |
+//! | [`bang_bang`] | the time-optimal bang-bang move of a joint to rest (the arm's release brake and its move to the catch) | Akella, Huang, Lynch & Mason, sec. 2.5 |
 //! | [`bspline`] | uniform cubic B-spline joint trajectories: O(1) evaluation, convex-hull bounds | Akella, Huang, Lynch & Mason, sec. 2.1 |
 //! | [`estimate`] | fixed-rate ball-state estimator with impact re-initialisation | — |
 //! | [`track`] | paddle tracking: PD plus feed-forward within limits | — |
@@ -39,6 +40,7 @@
 #![deny(unsafe_code)]
 
 pub mod arm_control;
+pub mod bang_bang;
 pub mod bspline;
 pub(crate) mod checks;
 pub mod control;

@@ -412,3 +412,54 @@ fn the_fixed_rate_view_is_the_controller() {
     assert_eq!(a.fault, Fault::Stale);
     assert_eq!(FixedRate::telemetry(&c), Default::default());
 }
+
+/// The move to the catch, by hand: the spline 0, 0, 0, 0.1, 0.2, 0.3 of 0.1 s segments ends
+/// (T = 0.3 s) at (0.1 + 4 * 0.2 + 0.3) / 6 = 0.2 rad moving at (0.3 - 0.1) / 0.2 = 1 rad/s.
+/// To rest at -0.1 rad under a = 30: the brake alone would stop 1/60 rad on, so the move
+/// brakes first (sigma = -1), peaks at w_1 = -sqrt(30 * 0.3 + 1/2) = -sqrt(9.5) rad/s after
+/// (1 + sqrt(9.5)) / 30 s, and decelerates for sqrt(9.5) / 30 s to rest at -0.1 rad.
+#[test]
+fn the_move_to_the_catch_is_the_bang_bang_to_its_angle() {
+    let p = ArmParams {
+        catches: true,
+        catch_angle_rad: -0.1,
+        ..arm(&[0.0, 0.0, 0.0, 0.1, 0.2, 0.3], 0.1)
+    };
+    let c = ArmController::new(p).unwrap();
+    let w1 = 9.5_f64.sqrt();
+    let (t1, t2) = ((1.0 + w1) / 30.0, w1 / 30.0);
+    let t = |s: f64| (0.3 + s) as f32;
+    assert_eq!(c.reference(t(0.5 * t1)).accel_radps2, -30.0);
+    assert_eq!(c.reference(t(t1 + 0.5 * t2)).accel_radps2, 30.0);
+    let peak = c.reference(t(t1));
+    assert!(close(peak.velocity_radps, -w1, 1e-4), "{peak:?}");
+    let rest = c.reference(t(t1 + t2 + 0.01));
+    assert!(close(rest.angle_rad, -0.1, 1e-5), "{rest:?}");
+    assert_eq!(rest.velocity_radps, 0.0);
+    // the braking stop, passed before the joint turns back: 0.2 + 1/60 rad
+    let top = c.reference(t(1.0 / 30.0));
+    assert!(close(top.angle_rad, 0.2 + 1.0 / 60.0, 1e-5), "{top:?}");
+}
+
+/// Without `catches` the same spline brakes to rest where that stops it: 0.2 + 1/60 rad.
+#[test]
+fn without_a_catch_the_move_is_the_brake() {
+    let c = ArmController::new(arm(&[0.0, 0.0, 0.0, 0.1, 0.2, 0.3], 0.1)).unwrap();
+    let rest = c.reference(0.3 + 0.1);
+    assert!(close(rest.angle_rad, 0.2 + 1.0 / 60.0, 1e-5), "{rest:?}");
+    assert_eq!(rest.velocity_radps, 0.0);
+}
+
+/// A catching angle outside the joint's range, or not finite, is refused by name.
+#[test]
+fn a_catch_angle_out_of_range_is_refused_by_name() {
+    for bad in [2.0, f32::NAN] {
+        let p = ArmParams {
+            catches: true,
+            catch_angle_rad: bad,
+            ..arm(&[0.0; 4], 0.1)
+        };
+        let e = ArmController::new(p).unwrap_err();
+        assert!(format!("{e:?}").contains("catch_angle_rad"), "{e:?}");
+    }
+}

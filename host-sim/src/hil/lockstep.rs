@@ -473,4 +473,11 @@ impl<C: Wire> StepController<C> for LockStep<C> {
         self.counters.time_in_steps += t0.elapsed();
         Ok(output)
     }
+
+    /// A new `Configure` to the firmware, and a new shadow of the same parameters.
+    fn reconfigure(&mut self, params: C::Params) -> Result<(), ControllerError> {
+        self.shadow = C::new(params).map_err(ControllerError::Params)?;
+        self.last_output = None;
+        self.configure(params)
+    }
 }

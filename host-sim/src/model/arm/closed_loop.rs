@@ -197,7 +197,7 @@ pub fn track(
         torque_max_nm: sys.bounds.torque_max_nm,
     };
     let dt = sys.tracking.dt_s;
-    let planned = plan.motion(sys.bounds.brake_accel_radps2);
+    let planned = plan.motion(&sys.rest_move());
     // past the verifier's end (settled + hold) by a few periods
     let steps = ((planned.settled_s() + sys.task.hold_s) / dt).ceil() as usize + 5;
     let m = TrackedMotion {

@@ -11,8 +11,9 @@
 //! | [`contact`] | grasp and roll forces, phase conditions, flight, the arm's torque (derived) |
 //! | [`impact`] | one-sided plastic impacts: an edge landing stops or rocks onto its striking vertex |
 //! | [`task`] | the tasks as phase sequences (g, gf, grg, grf, gf + catch) and their goals |
+//! | [`juggle`] | throw and catch again and again, each catch the next throw's start |
 //! | [`params`] | the scene's tables, validation naming the dotted key |
-//! | [`motion`] | joint motions: the planned spline with its release brake |
+//! | [`motion`] | joint motions: the planned spline with its move to rest (the release brake, or the bang-bang to a catch) |
 //! | [`planner`] | design vector, sec. 2.2 constraints, shooting seeds, SLSQP / ALM |
 //! | [`simulate`] | the event-driven verifier and its verdicts |
 //! | [`closed_loop`] | the plan tracked by the core's `ArmController` (SIL), then verified |
@@ -54,6 +55,7 @@ pub mod closed_loop;
 pub mod contact;
 pub mod geometry;
 pub mod impact;
+pub mod juggle;
 pub mod motion;
 pub mod params;
 pub mod planner;
@@ -64,6 +66,7 @@ use contact::{ArmInertia, Placement, Rig};
 use dexter_core::arm_control::{ArmParams, JointLimits};
 use dexter_core::bspline::Knots;
 use dexter_core::params::ParamError;
+use motion::RestMove;
 use serde::{Deserialize, Serialize};
 use task::Task;
 
@@ -215,6 +218,15 @@ impl ArmScene {
         (inertia, c.hypot(s), s.atan2(c))
     }
 
+    /// How the arm comes to rest after its spline: braking, or to the catch's angle.
+    pub fn rest_move(&self) -> RestMove {
+        RestMove {
+            accel_radps2: self.bounds.brake_accel_radps2,
+            velocity_max_radps: self.bounds.velocity_max_radps,
+            catch_angle_rad: self.task.catch.map(|c| c.angle_rad),
+        }
+    }
+
     /// The core controller's parameters for a trajectory (control points in rad, segment
     /// duration in s); errors name the `[tracking]` or `[arm]` key at fault.
     pub fn controller_params(
@@ -241,6 +253,8 @@ impl ArmScene {
             gravity_torque_nm: g_torque as f32,
             gravity_phase_rad: phase as f32,
             brake_accel_radps2: b.brake_accel_radps2 as f32,
+            catches: self.task.catch.is_some(),
+            catch_angle_rad: self.task.catch.map_or(0.0, |c| c.angle_rad as f32),
             max_tracking_error_rad: t.max_tracking_error_rad as f32,
             stale_limit_steps: 5,
             trajectory: Knots::from_slice(&pts, segment_s as f32)?,

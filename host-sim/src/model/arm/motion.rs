@@ -2,6 +2,7 @@
 //! controller's braking tail, or a tracked motion from the closed loop.
 
 use super::contact::Joint;
+use dexter_core::bang_bang::BangBang;
 use dexter_core::bspline;
 
 /// A joint motion known at every time.
@@ -17,19 +18,48 @@ pub trait ArmMotion {
     fn breaks_s(&self) -> Vec<f64>;
 }
 
-/// The planned trajectory: the B-spline on `[0, T]`, then braking at `brake_accel` from
-/// the end velocity to rest, then holding (as the core's `ArmController::reference`).
+/// How the arm comes to rest after its spline: the core's bang-bang move
+/// ([`dexter_core::bang_bang`]), braking wherever it stops, or reaching a catch angle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RestMove {
+    /// Acceleration bound of the move, rad/s^2 (`arm.brake_accel_radps2`).
+    pub accel_radps2: f64,
+    /// Speed bound of the move, rad/s (`arm.velocity_max_radps`).
+    pub velocity_max_radps: f64,
+    /// Where it comes to rest, rad: `None` where the brake stops (a throw), `Some` at the
+    /// catching configuration (a throw and catch).
+    pub catch_angle_rad: Option<f64>,
+}
+
+/// The planned trajectory: the B-spline on `[0, T]`, then the move to rest, then holding
+/// (as the core's `ArmController::reference`, in f64).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlannedMotion {
     /// Control points, rad.
     pub points_rad: Vec<f64>,
     /// Segment duration, s.
     pub segment_s: f64,
-    /// Braking deceleration after `T`, rad/s^2.
-    pub brake_accel_radps2: f64,
+    /// The move to rest after `T`.
+    tail: BangBang<f64>,
 }
 
 impl PlannedMotion {
+    /// The spline of `points_rad` (rad) with segments of `segment_s` (s), then `rest`.
+    pub fn new(points_rad: Vec<f64>, segment_s: f64, rest: &RestMove) -> Self {
+        let mut m = Self {
+            points_rad,
+            segment_s,
+            tail: BangBang::default(),
+        };
+        let e = m.spline(m.duration_s());
+        let (x, w, a) = (e.angle_rad, e.velocity_radps, rest.accel_radps2);
+        m.tail = match rest.catch_angle_rad {
+            None => BangBang::brake(x, w, a),
+            Some(c) => BangBang::to_rest_at(x, w, c, a, rest.velocity_max_radps),
+        };
+        m
+    }
+
     /// Spline duration T, s.
     pub fn duration_s(&self) -> f64 {
         (self.points_rad.len() as f64 - 3.0) * self.segment_s
@@ -43,11 +73,6 @@ impl PlannedMotion {
             accel_radps2: s.accel_radps2,
         }
     }
-
-    /// Time the brake needs after `T`, s.
-    fn brake_s(&self) -> f64 {
-        self.spline(self.duration_s()).velocity_radps.abs() / self.brake_accel_radps2
-    }
 }
 
 impl ArmMotion for PlannedMotion {
@@ -56,22 +81,16 @@ impl ArmMotion for PlannedMotion {
         if t_s <= end {
             return self.spline(t_s);
         }
-        let e = self.spline(end);
-        let a = self.brake_accel_radps2;
-        let w = e.velocity_radps;
-        let dir = if w < 0.0 { -1.0 } else { 1.0 };
-        let stop = self.brake_s();
-        let s = (t_s - end).min(stop);
-        let moving = t_s - end < stop;
+        let s = self.tail.sample(t_s - end);
         Joint {
-            angle_rad: e.angle_rad + w * s - 0.5 * dir * a * s * s,
-            velocity_radps: if moving { w - dir * a * s } else { 0.0 },
-            accel_radps2: if moving { -dir * a } else { 0.0 },
+            angle_rad: s.angle_rad,
+            velocity_radps: s.velocity_radps,
+            accel_radps2: s.accel_radps2,
         }
     }
 
     fn settled_s(&self) -> f64 {
-        self.duration_s() + self.brake_s()
+        self.duration_s() + self.tail.duration_s()
     }
 
     fn release_s(&self) -> f64 {
@@ -81,7 +100,8 @@ impl ArmMotion for PlannedMotion {
     fn breaks_s(&self) -> Vec<f64> {
         let n = self.points_rad.len().saturating_sub(3);
         let mut b: Vec<f64> = (0..=n).map(|k| k as f64 * self.segment_s).collect();
-        b.push(self.settled_s());
+        b.extend(self.tail.switches_s().map(|s| self.duration_s() + s));
+        b.dedup();
         b
     }
 }

@@ -192,8 +192,8 @@ pub struct TaskTable {
     #[serde(default)]
     pub impact_weight_s2pm2: f64,
     /// `catch_angle_rad`, `catch_edge`, `catch_position_m`: a throw and catch's nominal
-    /// catching joint angle (rad; the release brake must stop within
-    /// `planner::evaluate::CATCH_ANGLE_TOL_RAD` of it), the edge it lands on and that
+    /// catching joint angle (rad; the bang-bang move after the release comes to rest
+    /// there), the edge it lands on and that
     /// edge's midpoint along the surface (m) (required for `throw_catch`).
     pub catch_angle_rad: Option<f64>,
     /// See `catch_angle_rad`.
@@ -206,7 +206,23 @@ pub struct TaskTable {
     /// `hold_s`: time the verifier keeps the arm at rest after the motion, s, 0 ..= 10 (0.3).
     #[serde(default = "default_hold")]
     pub hold_s: f64,
+    /// `cycles`: throw-catch cycles in a row, 1 ..= 50 (1); more than one only for a
+    /// `throw_catch`, whose every catch is the next throw's start (the juggle).
+    #[serde(default = "default_cycles")]
+    pub cycles: usize,
+    /// `mu`: the contact's Coulomb friction coefficient, at which a juggle's cycles are
+    /// verified (> 0; each cycle's plan must need at most it). Without it each cycle is
+    /// verified at its own plan's `mu_required`.
+    pub mu: Option<f64>,
 }
+
+fn default_cycles() -> usize {
+    1
+}
+
+/// Most throw-catch cycles a juggle runs (`task.cycles`): each is planned and verified,
+/// so this bounds a run's work.
+pub const MAX_CYCLES: usize = 50;
 
 fn default_goal_tol() -> f64 {
     0.01
@@ -304,6 +320,19 @@ impl Default for TrackingTable {
             accel_max_radps2: 30.0,
             max_tracking_error_rad: 0.2,
         }
+    }
+}
+
+impl TaskTable {
+    /// `task.cycles`, checked: 1 ..= [`MAX_CYCLES`], and more than one only for a catch.
+    fn cycles(&self) -> Result<usize, ArmError> {
+        if !(1..=MAX_CYCLES).contains(&self.cycles) {
+            return Err(relation("task.cycles", "1 ..= 50"));
+        }
+        if self.cycles > 1 && self.kind != TaskKind::ThrowCatch {
+            return Err(relation("task.cycles", "1 unless task.kind is throw_catch"));
+        }
+        Ok(self.cycles)
     }
 }
 
@@ -495,6 +524,8 @@ impl TaskTable {
                 self.impact_weight_s2pm2,
             )?,
             hold_s: within("task.hold_s", self.hold_s, 0.0, MAX_HOLD_S)?,
+            cycles: self.cycles()?,
+            mu: self.mu.map(|m| positive("task.mu", m)).transpose()?,
         })
     }
 

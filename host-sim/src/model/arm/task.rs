@@ -8,8 +8,8 @@
 //!   rest with the object grasped on the new edge;
 //! - rolling throw `grf`: release it while it rolls;
 //! - throw and catch `gf` + `g`: a throw whose goal is the object lying on an edge of the
-//!   arm at rest at the catching angle, which the release brake (sec. 2.5's maximal
-//!   deceleration) reaches before the object comes down; the catch is a one-sided
+//!   arm at rest at the catching angle, which the time-optimal bang-bang move after the
+//!   release (sec. 2.5) reaches before the object comes down; the catch is a one-sided
 //!   plastic impact into a dynamic grasp ([`super::impact`]).
 
 use serde::{Deserialize, Serialize};
@@ -128,7 +128,7 @@ pub struct Goal {
 /// `place.edge` flat on the surface at `place` (the throw's goal is that pose).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Catch {
-    /// The catching joint angle, rad (the release brake's stop).
+    /// The catching joint angle, rad (where the bang-bang move after the release rests).
     pub angle_rad: f64,
     /// The edge and where it lies on the surface.
     pub place: super::contact::Placement,
@@ -155,4 +155,8 @@ pub struct Task {
     pub impact_weight_s2pm2: f64,
     /// Time the verifier keeps the arm at rest after the trajectory, s.
     pub hold_s: f64,
+    /// Throw-catch cycles in a row (1 but for a juggle).
+    pub cycles: usize,
+    /// The contact's friction coefficient a juggle is verified at (else each plan's mu).
+    pub mu: Option<f64>,
 }

@@ -29,3 +29,7 @@ pub const ALL: [(&str, &str); 4] = [
     ("roll", ROLL),
     ("rolling_throw", ROLLING_THROW),
 ];
+
+/// `scenes/arm-juggle.toml`: ten throw-catch cycles in a row, each from where the last
+/// catch left the square.
+pub const JUGGLE: &str = include_str!("../../../../scenes/arm-juggle.toml");

@@ -227,7 +227,7 @@ pub fn run_with(
     tracker: Option<&mut dyn StepController<ArmController>>,
     observe: &mut dyn FnMut(&Sample),
 ) -> Result<(ArmSummary, Option<TrackedMotion>), ArmError> {
-    let motion = plan.motion(sys.bounds.brake_accel_radps2);
+    let motion = plan.motion(&sys.rest_move());
     let ok = execute_observed(sys, &motion, plan.mu, SimOptions::default(), observe);
     let quiet = SimOptions {
         record: false,

@@ -18,10 +18,11 @@ pub mod summary;
 pub mod trace;
 
 use self::execute::run_with;
-use self::summary::{compare_trajectories, ArmOutcome};
+use self::summary::{compare_trajectories, ArmOutcome, JuggleSummary, TrajectoryComparison};
 use self::trace::ArmRow;
 use crate::controller::StepController;
 use crate::model::arm::closed_loop::{sil_controller, track_sil};
+use crate::model::arm::juggle::juggle;
 use crate::model::arm::params::ArmConfig;
 use crate::model::arm::planner::{plan, Plan};
 use crate::model::arm::{ArmError, ArmScene};
@@ -181,13 +182,49 @@ impl System for ArmSystem {
         let (summary, tracked) =
             run_with(&cfg.scene, plan, Some(tracker), &mut observe).map_err(Failure::run)?;
         let tracked = tracked.ok_or_else(|| Failure::run("the closed loop did not run"))?;
-        let against_sil = match on_target {
+        let mut against_sil = match on_target {
             true => {
                 let (sil_motion, _) = track_sil(&cfg.scene, plan).map_err(Failure::run)?;
                 Some(compare_trajectories(&tracked, &sil_motion))
             }
             false => None,
         };
-        Ok(ArmOutcome::new(cfg, summary, &tracked, against_sil))
+        let juggle = match cfg.scene.task.cycles {
+            1 => None,
+            _ => Some(run_juggle(cfg, tracker, against_sil.as_mut())?),
+        };
+        let mut outcome = ArmOutcome::new(cfg, summary, &tracked, against_sil);
+        outcome.json.juggle = juggle;
+        Ok(outcome)
     }
+}
+
+/// A juggle's two chains (exact, and tracked through `tracker`); on a target, its tracked
+/// motions compared with SIL's, cycle by cycle, into `against_sil`.
+fn run_juggle(
+    cfg: &ArmRunConfig,
+    tracker: &mut dyn StepController<ArmController>,
+    against_sil: Option<&mut TrajectoryComparison>,
+) -> Result<JuggleSummary, Failure> {
+    let (exact, _) = juggle(&cfg.tables, None).map_err(Failure::run)?;
+    let (tracked, motions) = juggle(&cfg.tables, Some(tracker)).map_err(Failure::run)?;
+    if let Some(total) = against_sil {
+        let mut sil = sil_controller(&cfg.scene, cfg.plan()?).map_err(Failure::run)?;
+        let (_, sil_motions) = juggle(&cfg.tables, Some(&mut sil)).map_err(Failure::run)?;
+        let t0 = total.steps as f64 * cfg.scene.tracking.dt_s;
+        for (a, b) in motions.iter().zip(&sil_motions) {
+            let c = compare_trajectories(a, b);
+            if total.first_mismatch_s.is_none() {
+                total.first_mismatch_s = c.first_mismatch_s.map(|t| t + t0);
+            }
+            total.steps += c.steps;
+            total.mismatches += c.mismatches;
+        }
+        total.mismatches += motions.len().abs_diff(sil_motions.len());
+    }
+    Ok(JuggleSummary {
+        cycles: cfg.scene.task.cycles,
+        exact,
+        tracked,
+    })
 }

@@ -129,7 +129,7 @@ fn trajectory(cfg: &ArmRunConfig, out: &ArmOutcome) -> Chart {
         s.trajectory.segment_s
     );
     Chart::new(title, "t (s)", "joint angle (rad)")
-        .line("planned (B-spline, then the release brake)", planned)
+        .line("planned (B-spline, then the move to rest)", planned)
         .line(
             format!("tracked by ArmController ({})", out.json.controller),
             out.tracked_angle.clone(),

@@ -8,6 +8,7 @@ use super::trace::phase_name;
 use super::ArmRunConfig;
 use crate::controller::HilReport;
 use crate::model::arm::closed_loop::TrackedMotion;
+use crate::model::arm::juggle::Chain;
 use crate::model::arm::simulate::{Executed, GoalError};
 use crate::model::arm::Solver;
 use crate::output::{json_text, JsonStyle};
@@ -61,6 +62,18 @@ pub struct HilSummary {
     pub sil_trajectory: TrajectoryComparison,
 }
 
+/// A juggle's cycles (`task.cycles > 1`): the exact chain and the tracked one.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JuggleSummary {
+    /// Cycles asked for.
+    pub cycles: usize,
+    /// The planned motions verified, each catch the next cycle's start.
+    pub exact: Chain,
+    /// The plans tracked by the controller (SIL or the target), each verified catch the
+    /// next cycle's start.
+    pub tracked: Chain,
+}
+
 /// The `--json` object.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ArmJson {
@@ -75,6 +88,8 @@ pub struct ArmJson {
     pub controller: &'static str,
     /// The target's figures (`--hil`), else null.
     pub hil: Option<HilSummary>,
+    /// A juggle's cycles, else null.
+    pub juggle: Option<JuggleSummary>,
 }
 
 /// An arm run's result.
@@ -109,6 +124,7 @@ impl ArmOutcome {
                 summary,
                 controller: "sil",
                 hil: None,
+                juggle: None,
             },
             tracked_angle: d.into_values(),
             against_sil,
@@ -244,6 +260,28 @@ impl ArmOutcome {
         o
     }
 
+    fn juggle_lines(&self) -> String {
+        let Some(j) = &self.json.juggle else {
+            return String::new();
+        };
+        let chain = |name: &str, c: &Chain| {
+            let last = c.cycles.last().filter(|l| l.executed != Executed::Ok);
+            format!(
+                "  juggle {name}: {} of {} cycles caught in a row, largest landing error {:.4} m{}\n",
+                c.completed,
+                j.cycles,
+                c.max_landing_error_m,
+                last.map_or(String::new(), |l| format!(
+                    "; cycle {} {}: {}",
+                    l.cycle,
+                    verdict(l.executed),
+                    l.reason
+                ))
+            )
+        };
+        chain("exact  ", &j.exact) + &chain("tracked", &j.tracked)
+    }
+
     fn hil_lines(&self) -> String {
         let Some(h) = &self.json.hil else {
             return String::new();
@@ -269,7 +307,11 @@ impl ArmOutcome {
 
 impl Outcome for ArmOutcome {
     fn text(&self) -> String {
-        self.plan_lines() + &self.verify_lines() + &self.tracking_lines() + &self.hil_lines()
+        self.plan_lines()
+            + &self.verify_lines()
+            + &self.tracking_lines()
+            + &self.juggle_lines()
+            + &self.hil_lines()
     }
 
     fn json(&self) -> Result<String, String> {

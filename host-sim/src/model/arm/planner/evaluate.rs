@@ -13,8 +13,8 @@
 //! | rolling friction (2) | friction cone and unilateral at every RK4 node of the roll |
 //! | roll angle (3) | `0 <= dir psi <= gamma` at every RK4 node |
 //! | roll completed (4) | `dir psi(t_g1 + t_roll) = gamma` (within 1e-3 rad) |
-//! | release state (5) | goal pose after `t_flight` within a tenth of its tolerance, falling; release separates under the brake; the brake stops within the joint limits |
-//! | catch (a throw and catch) | the brake stops within `CATCH_ANGLE_TOL_RAD` of the catching angle, at least `CATCH_LEAD_S` before the object arrives; the goal pose is the object lying on its catching edge there |
+//! | release state (5) | goal pose after `t_flight` within a tenth of its tolerance, falling; release separates under the move to rest's first arc; that move's braking stop lies within the joint limits |
+//! | catch (a throw and catch) | the bang-bang move after the release is at rest at the catching angle at least `CATCH_LEAD_S` before the object arrives; the goal pose is the object lying on its catching edge there |
 //!
 //! The torque rate is not checked across a phase change: the roll's end is an impact and
 //! a throw's release a deliberate maximal deceleration (sec. 2.5), both jumps in torque.
@@ -28,8 +28,6 @@ use super::layout::{Design, Layout};
 use crate::engine::ode::{Method, Rk4, State};
 use serde::Serialize;
 
-/// How far the brake's stop may be from a catch's nominal angle (`task.catch_angle_rad`), rad.
-pub const CATCH_ANGLE_TOL_RAD: f64 = 0.15;
 /// How long the arm must be at rest at the catching angle before the object arrives, s.
 pub const CATCH_LEAD_S: f64 = 0.02;
 
@@ -65,7 +63,7 @@ pub enum Kind {
     Goal,
     /// Brake stops within the joint limits.
     BrakeStop,
-    /// A catch: the brake stops at the catching angle before the object comes down.
+    /// A catch: the arm is at rest at the catching angle before the object comes down.
     Catch,
 }
 
@@ -88,7 +86,7 @@ impl std::fmt::Display for Kind {
             Self::Goal => "the goal pose",
             Self::BrakeStop => "the brake stop within the joint limits",
             Self::Catch => {
-                "the catch (the brake's stop at the catching angle, before the object arrives)"
+                "the catch (the arm at rest at the catching angle before the object arrives)"
             }
         })
     }
@@ -175,11 +173,7 @@ impl<'a> Problem<'a> {
 
     /// The planned motion of a design.
     pub fn motion(&self, d: &Design) -> PlannedMotion {
-        PlannedMotion {
-            points_rad: d.points_rad.clone(),
-            segment_s: d.segment_s,
-            brake_accel_radps2: self.sys.bounds.brake_accel_radps2,
-        }
+        PlannedMotion::new(d.points_rad.clone(), d.segment_s, &self.sys.rest_move())
     }
 
     /// Objective and constraints at `x`; with `trace`, the plan's samples too.
@@ -447,7 +441,7 @@ impl<'a> Problem<'a> {
         (psi, w)
     }
 
-    /// Release under the brake, the brake's stop, and the goal after `dur` of flight.
+    /// Release under the move to rest, its braking stop, and the goal after `dur` of flight.
     fn flight(
         &self,
         m: &PlannedMotion,
@@ -460,8 +454,11 @@ impl<'a> Problem<'a> {
         let sys = self.sys;
         let g = sys.rig.gravity_mps2;
         let jr = m.joint(t_rel);
+        // the move after the release starts by braking (for a catch, a constraint below
+        // keeps the catching angle behind the braking stop, so its first arc is the brake)
+        let a_b = sys.bounds.brake_accel_radps2;
         let brake = Joint {
-            accel_radps2: -jr.velocity_radps.signum() * sys.bounds.brake_accel_radps2,
+            accel_radps2: -jr.velocity_radps.signum() * a_b,
             ..jr
         };
         let n = sys.rig.surface.normal().rotate(jr.angle_rad);
@@ -473,15 +470,22 @@ impl<'a> Problem<'a> {
             sink.push(Kind::Release, (1.0 - sep) / g);
         }
         let stop = m.joint(m.settled_s()).angle_rad;
-        // a hundredth of a radian inside the limits: the controller checks the same stop
-        // in f32
+        // a hundredth of a radian inside the limits: the controller checks the same
+        // extremes in f32
         let (lo, hi) = self.layout.angle_bounds;
         sink.within(Kind::BrakeStop, stop, lo + 0.01, hi - 0.01, hi - lo);
         let mut goal = sys.task.goal;
         if let (Some(c), Some(g)) = (sys.task.catch, goal.as_mut()) {
-            // the release brake is the time-optimal move to rest: the catching
-            // configuration is where it stops, reached a little before the object arrives,
-            // and the goal is the object lying there on its catching edge
+            // the bang-bang move brakes first (the catching angle behind the braking stop:
+            // its switch sign opposes the release velocity), so it overshoots to the
+            // braking stop before it comes back: that stop within the limits too
+            let w = jr.velocity_radps;
+            let braking = jr.angle_rad + w * w.abs() / (2.0 * a_b);
+            sink.within(Kind::BrakeStop, braking, lo + 0.01, hi - 0.01, hi - lo);
+            sink.push(Kind::Catch, (c.angle_rad - braking) * w.signum() / 0.1);
+            // the bang-bang move reaches the catching configuration (sec. 2.5), a little
+            // before the object arrives; the goal is the object lying there on its
+            // catching edge
             let at = Joint {
                 angle_rad: stop,
                 ..Default::default()
@@ -492,8 +496,6 @@ impl<'a> Problem<'a> {
                 .round();
             (g.x_m, g.y_m) = (pose.com.x, pose.com.y);
             g.angle_rad = pose.angle_rad + std::f64::consts::TAU * turns;
-            let tol = CATCH_ANGLE_TOL_RAD;
-            sink.within(Kind::Catch, stop, c.angle_rad - tol, c.angle_rad + tol, 1.0);
             let early = m.settled_s() - (t_rel + dur) + CATCH_LEAD_S;
             sink.push(Kind::Catch, early / 0.1);
         }

@@ -10,7 +10,7 @@ pub mod refine;
 pub mod seed;
 pub mod solve;
 
-use super::motion::PlannedMotion;
+use super::motion::{PlannedMotion, RestMove};
 use super::task::Phase;
 use super::{ArmError, ArmScene, Solver};
 use crate::progress::Progress;
@@ -79,13 +79,9 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// The planned joint motion (spline, then the release brake, then rest).
-    pub fn motion(&self, brake_accel_radps2: f64) -> PlannedMotion {
-        PlannedMotion {
-            points_rad: self.points_rad.clone(),
-            segment_s: self.segment_s,
-            brake_accel_radps2,
-        }
+    /// The planned joint motion (spline, then the move to rest, then rest).
+    pub fn motion(&self, rest: &RestMove) -> PlannedMotion {
+        PlannedMotion::new(self.points_rad.clone(), self.segment_s, rest)
     }
 
     /// Times of the control points' Greville abscissae, s: where each point "sits" on
@@ -215,6 +211,17 @@ pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
         evaluations += s.evaluations;
         let e = problem.evaluate(&s.x, false);
         let (w, kind) = worst(&e);
+        if std::env::var_os("DEXTER_DEBUG_PLAN").is_some() {
+            let bad: Vec<_> = e
+                .constraints
+                .iter()
+                .zip(&e.kinds)
+                .enumerate()
+                .filter(|(_, (c, _))| **c > FEASIBILITY_TOL)
+                .map(|(i, (c, k))| format!("{i}:{k}={c:.3e}"))
+                .collect();
+            eprintln!("start {k}: {} {:?}", s.status, bad);
+        }
         if w > FEASIBILITY_TOL {
             if w < least_bad.0 {
                 least_bad = (w, kind, s.status.clone());

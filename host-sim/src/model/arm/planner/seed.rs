@@ -7,7 +7,7 @@
 //! the task's phases are ranked (throws by how close the flight passes the goal, then by
 //! friction) and the best become the starts.
 
-use super::super::motion::{ArmMotion, PlannedMotion};
+use super::super::motion::{ArmMotion, PlannedMotion, RestMove};
 use super::super::simulate::{execute_with, Execution, SimOptions};
 use super::super::task::TaskKind;
 use super::evaluate::Problem;
@@ -187,19 +187,22 @@ pub fn seeds(problem: &Problem, count: usize) -> Vec<Vec<f64>> {
     let mut found: Vec<(f64, Vec<f64>)> = Vec::new();
     for shape in family(kind.throws(), matches!(l.end, End::Rest(..))) {
         let pts = points(problem, kind, &shape);
-        let m = PlannedMotion {
-            segment_s: shape.duration_s / (l.knots - 3) as f64,
-            points_rad: pts.clone(),
-            brake_accel_radps2: sys.bounds.brake_accel_radps2,
-        };
+        let segment_s = shape.duration_s / (l.knots - 3) as f64;
+        let m = PlannedMotion::new(pts.clone(), segment_s, &sys.rest_move());
         let e = execute_with(sys, &m, f64::INFINITY, opt);
 
         let Some((ts, mut score)) = times(problem, &e, shape.duration_s) else {
             continue;
         };
         if let Some(c) = sys.task.catch {
-            // a catch: the brake must stop at the catching angle
-            score += (m.joint(m.settled_s()).angle_rad - c.angle_rad).abs() / 0.02;
+            // a catch: prefer a release whose brake alone would stop near the catching
+            // angle (a short move there, and the object clear of the arm's way back)
+            let rest = RestMove {
+                catch_angle_rad: None,
+                ..sys.rest_move()
+            };
+            let brake = PlannedMotion::new(pts.clone(), segment_s, &rest);
+            score += (brake.joint(brake.settled_s()).angle_rad - c.angle_rad).abs() / 0.02;
         }
 
         // clamping a grasp or roll time would rescale the spline and change its events;

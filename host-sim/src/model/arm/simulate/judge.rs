@@ -123,6 +123,9 @@ impl Runner<'_> {
         }
         self.out.executed = how;
         self.out.reason = why;
+        if let State::Grasp(p) = self.state {
+            self.out.rest = Some(p);
+        }
         // the last frame shows where the run ended
         self.next_frame = self.t;
         self.record();

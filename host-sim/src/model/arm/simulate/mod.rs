@@ -123,6 +123,8 @@ pub struct Execution {
     /// The phase letters the run went through ([`judge::executed_phases`]): a run that
     /// reaches its goal through other phases than the task's is `missed`.
     pub phases: String,
+    /// Where the object lies on the arm at the end, if it is grasped there.
+    pub rest: Option<Placement>,
 }
 
 /// One impact of the run.
@@ -272,6 +274,7 @@ impl<'a> Runner<'a> {
                 phases: String::new(),
                 catch_index: None,
                 catch_flat_error_rad: None,
+                rest: None,
             },
             next_frame: 0.0,
             next_friction: 0.0,
