@@ -3,7 +3,9 @@
 //! throw's goal), `-trajectory` (the planned joint angle with its knots at their Greville
 //! abscissae, the tracked angle, and the events) and `-friction` (the friction the
 //! verified run needs over time, the plan's own samples, every impact's impulse ratio,
-//! mu_required and 0.95 mu).
+//! mu_required and 0.95 mu), `-torque` (the torque the controller commanded, the plan's
+//! samples, the limits and the events) and, for a juggle, `-juggle` (each cycle's landing
+//! error, exact and tracked).
 //!
 //! Everything drawn comes from the outcome, whose size is bounded by the run's simulated
 //! time (at most a few tens of seconds; `docs/arm.md`); rows are not kept.
@@ -52,6 +54,10 @@ impl Plots<ArmSystem> for ArmPlots {
         let mut written = filmstrip(&title, &frames, dir, &format!("{name}-filmstrip"))?;
         written.extend(trajectory(cfg, out).draw(dir, &format!("{name}-trajectory"))?);
         written.extend(friction(cfg, out).draw(dir, &format!("{name}-friction"))?);
+        written.extend(torque(cfg, out).draw(dir, &format!("{name}-torque"))?);
+        if let Some(j) = &out.json.juggle {
+            written.extend(juggle(cfg, j).draw(dir, &format!("{name}-juggle"))?);
+        }
         Ok(written)
     }
 }
@@ -136,6 +142,52 @@ fn trajectory(cfg: &ArmRunConfig, out: &ArmOutcome) -> Chart {
         )
         .dots("control points at their Greville abscissae", knots)
         .line("events (verified run)", event_marks(out, lo, hi))
+}
+
+fn torque(cfg: &ArmRunConfig, out: &ArmOutcome) -> Chart {
+    let s = &out.json.summary;
+    let planned = s
+        .friction_planned
+        .iter()
+        .map(|p| (p.t_s, p.torque_nm))
+        .collect();
+    let m = cfg.scene.bounds.torque_max_nm;
+    let tau = out.tracked_torque.iter().map(|p| p.1);
+    let (lo, hi) = tau.fold((-m, m), |(a, b), y| (a.min(y), b.max(y)));
+    let end = out.tracked_torque.last().map_or(1.0, |p| p.0);
+    Chart::new(
+        format!("{}: joint torque", cfg.name),
+        "t (s)",
+        "torque (N m)",
+    )
+    .line(
+        format!("commanded by ArmController ({})", out.json.controller),
+        out.tracked_torque.clone(),
+    )
+    .dots("planner's samples", planned)
+    .line(format!("limit +-{m:.0} N m"), vec![(0.0, m), (end, m)])
+    .line("-limit", vec![(0.0, -m), (end, -m)])
+    .line("events (verified run)", event_marks(out, lo, hi))
+}
+
+/// A juggle's landing error per cycle, exact and tracked.
+fn juggle(cfg: &ArmRunConfig, j: &super::summary::JuggleSummary) -> Chart {
+    let errors = |c: &crate::model::arm::juggle::Chain| {
+        c.cycles
+            .iter()
+            .filter_map(|y| y.landing_error_m.map(|e| (y.cycle as f64, 1e3 * e)))
+            .collect()
+    };
+    Chart::new(
+        format!(
+            "{}: landing error per cycle (exact {} of {}, tracked {} of {} caught)",
+            cfg.name, j.exact.completed, j.cycles, j.tracked.completed, j.cycles
+        ),
+        "cycle",
+        "caught position - catch position (mm)",
+    )
+    .dots("exact", errors(&j.exact))
+    .dots("tracked by ArmController", errors(&j.tracked))
 }
 
 fn friction(cfg: &ArmRunConfig, out: &ArmOutcome) -> Chart {

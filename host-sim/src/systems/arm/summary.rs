@@ -99,6 +99,8 @@ pub struct ArmOutcome {
     pub json: ArmJson,
     /// Tracked joint angle over time, (s, rad), decimated (plots).
     pub tracked_angle: Vec<(f64, f64)>,
+    /// Torque the controller commanded over time, (s, N m), decimated (plots).
+    pub tracked_torque: Vec<(f64, f64)>,
     /// The tracked trajectory against SIL's (`--hil` only), until the report is attached.
     against_sil: Option<TrajectoryComparison>,
     /// Control period, s.
@@ -117,6 +119,10 @@ impl ArmOutcome {
         for (k, (x, _)) in tracked.states.iter().enumerate() {
             d.push((k as f64 * tracked.dt_s, *x));
         }
+        let mut tau = Decimator::default();
+        for (k, t) in tracked.torques_nm.iter().enumerate() {
+            tau.push((k as f64 * tracked.dt_s, *t));
+        }
         Self {
             json: ArmJson {
                 scene: cfg.name.clone(),
@@ -127,6 +133,7 @@ impl ArmOutcome {
                 juggle: None,
             },
             tracked_angle: d.into_values(),
+            tracked_torque: tau.into_values(),
             against_sil,
             dt_s: tracked.dt_s,
         }
