@@ -369,3 +369,132 @@ fn the_tracked_catch_strikes_vertex_first_and_needs_more_friction_than_the_plan_
     );
     assert!(imp.judged(0.3993).is_err());
 }
+
+/// The arm drops away under the resting square and stops tilted, so that the square
+/// falls level onto it corner first: a whole catch through the verifier.
+///
+/// The arm (link surface 0.05 m above the joint) accelerates clockwise at `A = 80 rad/s^2`
+/// for `t1 = 25 ms` and back for `t1`, stopping at `theta_c = -A t1^2 = -0.05 rad` at
+/// 50 ms. At the square (0.9 m out) the surface falls at `80 * 0.9 = 72 m/s^2 > g`: the
+/// grasp separates at once (the throw's release, at `release_s = 0`), and the square
+/// falls level without rotation. Relative to the stopped arm edge 0 is tilted by
+/// `+0.05 rad` > `FLAT_TOL_RAD`: its left end, vertex 0, strikes first, at `u` straight
+/// down (world). The object is level in the world, so `r - w = (a/2, a/2)` (world) and
+/// `(r - w) x v = -u a/2`: `omega+ = -(u a/2) / (a^2/6 + a^2/2) = -3u / 4a`, whatever the
+/// tilt, and `Pi = v+ - v = (3u/8, 5u/8)` (world), i.e. along the arm's `t = (cos,
+/// sin)(theta_c)` and `n = (-sin, cos)(theta_c)`: `Pi_t = u (3/8 cos 0.05 - 5/8 sin
+/// 0.05)`, `Pi_n = u (3/8 sin 0.05 + 5/8 cos 0.05)`; the corner's normal approach speed is
+/// `u cos 0.05`. It turns back toward flat, the edge falls back (a `roll_back`), and the
+/// square rocks onto vertex 1 at 1/4 of the rate, and so on (`k = 1/4`, each rock's
+/// impulse needing friction `(1 - k) / (1 + k) = 3/5`) until it settles: at mu = 2 it is
+/// caught on edge 0 and held, through the phases `gfg`; at mu = 0.5 the corner's impulse
+/// slips.
+#[test]
+fn a_square_caught_on_a_corner_falls_back_rocks_and_is_held() {
+    use dexter_sim::model::arm::contact::Joint;
+    use dexter_sim::model::arm::motion::ArmMotion;
+    use dexter_sim::model::arm::params::ArmConfig;
+    use dexter_sim::model::arm::simulate::{execute, Executed};
+    use dexter_sim::systems::arm::examples;
+
+    struct DropAway;
+    const ACC: f64 = 80.0;
+    const T1: f64 = 0.025;
+    impl ArmMotion for DropAway {
+        fn joint(&self, t: f64) -> Joint {
+            let (angle, vel, acc) = if t < T1 {
+                (-0.5 * ACC * t * t, -ACC * t, -ACC)
+            } else if t < 2.0 * T1 {
+                let s = 2.0 * T1 - t;
+                (-ACC * T1 * T1 + 0.5 * ACC * s * s, -ACC * s, ACC)
+            } else {
+                (-ACC * T1 * T1, 0.0, 0.0)
+            };
+            Joint {
+                angle_rad: angle,
+                velocity_radps: vel,
+                accel_radps2: acc,
+            }
+        }
+        fn settled_s(&self) -> f64 {
+            2.0 * T1
+        }
+        fn release_s(&self) -> f64 {
+            0.0
+        }
+        fn breaks_s(&self) -> Vec<f64> {
+            vec![T1, 2.0 * T1]
+        }
+    }
+
+    let text = examples::THROW_CATCH.replace("catch_edge = 3", "catch_edge = 0");
+    let sys = ArmConfig::from_toml_str(&text).unwrap().validate().unwrap();
+    assert_eq!(sys.start.edge, 0);
+    assert!((sys.rig.body.rho_m.powi(2) - A * A / 6.0).abs() < 1e-15);
+    let tilt = ACC * T1 * T1;
+    assert!((DropAway.joint(1.0).angle_rad + tilt).abs() < 1e-15);
+
+    let e = execute(&sys, &DropAway, 2.0);
+    assert_eq!(e.executed, Executed::Ok, "{}: {:?}", e.reason, e.events);
+    assert_eq!(e.phases, "gfg");
+    assert_eq!(e.catch_index, Some(0));
+    let off = e.catch_flat_error_rad.unwrap();
+    assert!(
+        (off - tilt).abs() < 1e-12,
+        "tilted by the arm's stop: {off}"
+    );
+    let first = &e.impacts[0];
+    assert_eq!(first.edge, 0);
+    let imp = first.impact;
+    let u = imp.speed_mps / tilt.cos();
+    assert!(u > 0.5, "a real fall: {u}");
+    match imp.outcome {
+        Outcome::Rock {
+            vertex,
+            dir,
+            psi_rad,
+            ..
+        } => assert_eq!((vertex, dir, psi_rad), (0, 1.0, off)),
+        o => panic!("expected the corner strike, got {o:?}"),
+    }
+    assert_eq!(imp.cop_m, 0.0);
+    let tol = 1e-9;
+    assert!(imp.rate_before_radps.abs() < tol, "{imp:?}");
+    assert!(
+        (imp.rate_after_radps + 3.0 * u / (4.0 * A)).abs() < tol,
+        "{imp:?}"
+    );
+    let (c, s) = (tilt.cos(), tilt.sin());
+    assert!((imp.impulse_tangential_mps - u * (0.375 * c - 0.625 * s)).abs() < tol);
+    assert!((imp.impulse_normal_mps - u * (0.375 * s + 0.625 * c)).abs() < tol);
+    // then the edge falls back and rocks, each rock a quarter of the last, and settles
+    let kinds: Vec<&str> = e.events.iter().map(|ev| ev.kind).collect();
+    assert_eq!(
+        &kinds[..4],
+        ["release", "catch", "rock_ccw", "roll_back"],
+        "{kinds:?}"
+    );
+    assert!(e.impacts.len() >= 3, "{:?}", e.impacts);
+    let rates: Vec<f64> = e
+        .impacts
+        .iter()
+        .map(|i| i.impact.rate_after_radps)
+        .collect();
+    let rock = e.impacts[1].impact;
+    assert!(
+        matches!(rock.outcome, Outcome::Rock { vertex: 1, dir, psi_rad, .. } if dir == -1.0 && psi_rad == 0.0)
+    );
+    assert!((rock.friction_ratio() - 0.6).abs() < 0.01, "{rock:?}");
+    assert!(
+        (rates[1] / rock.rate_before_radps - 0.25).abs() < 1e-9,
+        "{rates:?}"
+    );
+    assert_eq!(e.impacts.last().unwrap().impact.outcome, Outcome::Grasp);
+
+    // the corner's impulse needs more than 0.5
+    assert!(imp.friction_ratio() > 0.5);
+    let low = execute(&sys, &DropAway, 0.5);
+    assert_eq!(low.executed, Executed::Slipped, "{}", low.reason);
+    assert!(low.reason.contains("impact"), "{}", low.reason);
+    assert_eq!(low.catch_index, Some(0));
+}
