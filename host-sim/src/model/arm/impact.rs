@@ -44,10 +44,12 @@
 //! `w`, plastic and sticking, evaluated in the tilted pose, `r - w = -R(alpha_0 + psi) b_w`
 //! (`b_w` the vertex in the body frame). The object then turns about `w` at `omega+` from
 //! `psi`, as a roll over `w` off `e` (the pivot of [`Rig::pivot`] in the direction
-//! `sign(psi)`, the side `e` is tilted to). For a body of no rate dropping straight at
-//! speed `u` onto a square's corner, `(r - w) x v = -u (a/2) (cos psi - sin psi)` and
-//! `omega+ = -(3 u / 4 a) (cos psi - sin psi)` (solid plate, `rho^2 = a^2/6`): it turns
-//! back toward flat, and the edge comes down on the surface as a roll's fall back.
+//! `sign(psi)`, the side `e` is tilted to). A solid square (`rho^2 = a^2/6`) tilted by
+//! `0 < psi < pi/4` and dropped without rotation at `u` along the surface's normal onto
+//! its corner has `(r - w) x v = -u (a/2) (cos psi - sin psi)`, so `omega+ = -(3 u / 4 a)
+//! (cos psi - sin psi)`: it turns back toward flat, and the edge comes down on the
+//! surface as a roll's fall back. The verifier uses this law for a catch tilted beyond
+//! `simulate::phases::FLAT_TOL_RAD`, and the whole edge's impact below it.
 //!
 //! **Friction.** The impulse must lie in its Coulomb cone, `|Pi_t| <= mu Pi_n`, or the
 //! contact slips during the impact (not modelled: the run fails saying so).
