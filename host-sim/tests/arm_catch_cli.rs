@@ -10,6 +10,11 @@
 //! frame), and its resultant acts where the angular impulse about the centre of mass is
 //! `-rho^2 omega_rel`: `sigma_c = ((r - O) x Pi - rho^2 omega_rel) / Pi_n`, O = (0, 0.05)
 //! the surface's origin (the link's half thickness), rho^2 = a^2 / 6 for the square plate.
+//!
+//! The SIL-tracked catch comes down 0.0288 rad from flat: its vertex strikes first
+//! (`impact::Rig::vertex_impact`), and that corner's sticking impulse needs friction 0.737
+//! (recomputed by hand in `tests/arm_impact.rs`), more than the plan's mu: `tracked` says
+//! `slipped` at that impact, no longer "missed" for an unmodelled strike.
 
 mod common;
 
@@ -90,4 +95,23 @@ fn the_throw_is_caught_on_its_edge_by_a_feasible_one_sided_impact() {
         m["reason"].as_str().unwrap().contains("impact"),
         "the run says where: {m}"
     );
+}
+
+#[test]
+fn the_tracked_catch_strikes_a_vertex_first_and_its_impulse_slips() {
+    let out = ok(&["run", &scene("arm-throw-catch"), "--json"]);
+    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let t = &j["tracked"];
+    assert_eq!(t["executed"], "slipped", "{t}");
+    let why = t["reason"].as_str().unwrap();
+    assert!(
+        why.contains("the impact at t = 1.0257 s slipped") && why.contains("0.7370"),
+        "the vertex strike's impulse, not an unmodelled strike: {why}"
+    );
+    // the friction the tracked motion needs is that impulse's (tests/arm_impact.rs)
+    assert!((f(&t["mu_needed"]) - 0.73697).abs() < 1e-4, "{t}");
+    assert!(f(&t["mu_needed"]) > f(&j["mu_required"]));
+    // the planned run is untouched: caught flat, a stop outright
+    assert_eq!(j["executed"], "ok");
+    assert_eq!(j["catch"]["outcome"], "grasp");
 }

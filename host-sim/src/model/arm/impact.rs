@@ -39,6 +39,18 @@
 //! omega for a thin frame, `rho^2 = a^2/3`), and the old pivot lifts off at
 //! `omega+ L`. A rock that falls back strikes again, each time slower, and settles.
 //!
+//! **Vertex first** (a flying object caught with edge `e` tilted by `psi != 0` from flat:
+//! the lower end `w` of `e` touches alone, [`Rig::vertex_impact`]): the same impulse at
+//! `w`, plastic and sticking, evaluated in the tilted pose, `r - w = -R(alpha_0 + psi) b_w`
+//! (`b_w` the vertex in the body frame). The object then turns about `w` at `omega+` from
+//! `psi`, as a roll over `w` off `e` (the pivot of [`Rig::pivot`] in the direction
+//! `sign(psi)`, the side `e` is tilted to). A solid square (`rho^2 = a^2/6`) tilted by
+//! `0 < psi < pi/4` and dropped without rotation at `u` along the surface's normal onto
+//! its corner has `(r - w) x v = -u (a/2) (cos psi - sin psi)`, so `omega+ = -(3 u / 4 a)
+//! (cos psi - sin psi)`: it turns back toward flat, and the edge comes down on the
+//! surface as a roll's fall back. The verifier uses this law for a catch tilted beyond
+//! `simulate::phases::FLAT_TOL_RAD`, and the whole edge's impact below it.
+//!
 //! **Friction.** The impulse must lie in its Coulomb cone, `|Pi_t| <= mu Pi_n`, or the
 //! contact slips during the impact (not modelled: the run fails saying so).
 
@@ -59,13 +71,21 @@ pub enum Outcome {
     Grasp,
     /// Rocking onto vertex `vertex`: a roll over it starts from the edge at rate
     /// `rate_radps` relative to the arm (counterclockwise positive).
+    ///
+    /// A vertex-first strike ([`Rig::vertex_impact`]) is a rock too, from `psi_rad` (the
+    /// tilt it struck at) rather than from the edge lying flat.
     Rock {
         /// The striking vertex, now the pivot.
         vertex: usize,
-        /// +1: the rock turns counterclockwise, -1 clockwise.
+        /// +1: the rock turns counterclockwise, -1 clockwise (for a vertex-first strike:
+        /// the side the edge is tilted to, the roll's `Pivot::dir`; it may turn back
+        /// toward flat at once, `rate_radps` of the other sign).
         dir: f64,
         /// Rate after the impact, rad/s.
         rate_radps: f64,
+        /// Roll angle the rock starts from, rad: 0 after an edge's impact, the tilt from
+        /// flat after a vertex-first strike (`dir psi_rad > 0`).
+        psi_rad: f64,
     },
 }
 
@@ -166,9 +186,8 @@ impl Rig {
         } else {
             (p.edge, ends[0], 0.0, 1.0)
         };
-        let rw = r.minus(w);
-        let after = (rho2 * omega + rw.cross(v)) / (rho2 + rw.norm2());
-        let (pn, pt) = axes(rw.perp().scale(after).minus(v));
+        let (after, pi) = about_vertex(rho2, r.minus(w), v, omega);
+        let (pn, pt) = axes(pi);
         let lift = after.abs() * l;
         let outcome = if lift < SETTLE_SPEED_MPS || after * dir <= 0.0 {
             Outcome::Grasp
@@ -177,6 +196,7 @@ impl Rig {
                 vertex,
                 dir,
                 rate_radps: after,
+                psi_rad: 0.0,
             }
         };
         EdgeImpact {
@@ -196,6 +216,76 @@ impl Rig {
         }
     }
 
+    /// Edge `edge` tilted by `psi_rad` from flat (the object at arm-frame angle
+    /// `alpha_rad(edge) + psi_rad`), its centre of mass at `com_arm`: the placement of
+    /// that edge were it turned flat about its lower end (vertex `edge` if `psi_rad >= 0`,
+    /// else `edge + 1`), and the pivot over that end, so that the roll's pose at
+    /// `psi = psi_rad` ([`Rig::rolling_state`]) is this one, with the lower end at its
+    /// foot on the surface.
+    pub fn tilted(&self, edge: usize, psi_rad: f64, com_arm: V2) -> (Placement, Pivot) {
+        let dir = if psi_rad >= 0.0 { 1.0 } else { -1.0 };
+        let low = if dir > 0.0 {
+            edge
+        } else {
+            (edge + 1) % self.body.len()
+        };
+        let w = com_arm.plus(self.body.vertex(low).rotate(self.alpha_rad(edge) + psi_rad));
+        let sigma_w = self.surface.sigma_m(w);
+        let p = Placement {
+            edge,
+            sigma_m: if dir > 0.0 {
+                sigma_w
+            } else {
+                sigma_w - self.body.edge_length_m(edge)
+            },
+        };
+        (p, self.pivot(&p, dir))
+    }
+
+    /// The one-sided impact of the object striking with a vertex first (module docs):
+    /// edge `p` tilted by `psi_rad` (`pv.dir psi_rad > 0`) with its lower end, the pivot
+    /// `pv` ([`Rig::tilted`]), on the surface, the object's relative twist `v` (centre of
+    /// mass, arm frame, m/s) and `omega` (rad/s). The impulse acts at that vertex alone;
+    /// the outcome is always a [`Outcome::Rock`] from `psi_rad` (the roll it starts falls
+    /// back onto `p`, tips on, or leaves). `cop_m` is the vertex (0 or L along `p`);
+    /// `stop_cop_m` is where on the surface line, from `p`'s first vertex, a stop outright
+    /// would need its resultant (at the vertex alone only by chance).
+    pub fn vertex_impact(
+        &self,
+        pv: &Pivot,
+        p: &Placement,
+        psi_rad: f64,
+        v: V2,
+        omega: f64,
+    ) -> EdgeImpact {
+        let s = &self.surface;
+        let (t, n) = (s.tangent(), s.normal());
+        let w = s.point(pv.sigma_m);
+        let r = w.plus(self.pivot_to_com_arm(pv, psi_rad));
+        let l = self.body.edge_length_m(p.edge);
+        let rho2 = self.body.rho_m * self.body.rho_m;
+        let speed_mps = (-v.plus(w.minus(r).perp().scale(omega)).dot(n)).max(0.0);
+        let stop = v.scale(-1.0);
+        let stop_sigma = (r.minus(s.origin).cross(stop) - rho2 * omega) / stop.dot(n);
+        let (after, pi) = about_vertex(rho2, r.minus(w), v, omega);
+        EdgeImpact {
+            outcome: Outcome::Rock {
+                vertex: pv.vertex,
+                dir: pv.dir,
+                rate_radps: after,
+                psi_rad,
+            },
+            impulse_normal_mps: pi.dot(n),
+            impulse_tangential_mps: pi.dot(t),
+            cop_m: pv.sigma_m - p.sigma_m,
+            stop_cop_m: stop_sigma - p.sigma_m,
+            edge_length_m: l,
+            speed_mps,
+            rate_before_radps: omega,
+            rate_after_radps: after,
+        }
+    }
+
     /// The impact that ends a roll over `pv` at relative rate `psi_dot`, onto edge `p`
     /// (the landed edge at `|psi| = gamma`, or the old edge falling back at `psi = 0`).
     pub fn roll_impact(&self, pv: &Pivot, p: &Placement, psi_dot_radps: f64) -> EdgeImpact {
@@ -203,4 +293,12 @@ impl Rig {
         let v = self.com_arm(p).minus(pivot).perp().scale(psi_dot_radps);
         self.edge_impact(p, v, psi_dot_radps)
     }
+}
+
+/// The plastic, sticking impulse at vertex `w` (`rw = r - w`) on an object of twist
+/// `(v, omega)`: angular momentum about `w` conserved, `omega+ = (rho^2 omega + (r - w) x
+/// v) / (rho^2 + |r - w|^2)`, then `v+ = omega+ J (r - w)`; the rate after and `Pi = v+ - v`.
+fn about_vertex(rho2: f64, rw: V2, v: V2, omega: f64) -> (f64, V2) {
+    let after = (rho2 * omega + rw.cross(v)) / (rho2 + rw.norm2());
+    (after, rw.perp().scale(after).minus(v))
 }

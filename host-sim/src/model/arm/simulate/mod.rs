@@ -53,8 +53,10 @@ pub struct Event {
     /// When, s.
     pub t_s: f64,
     /// What: `roll_start_ccw`, `roll_start_cw`, `roll_end`, `roll_back`, `rock_ccw`,
-    /// `rock_cw` (an impact rocked the object onto its striking vertex), `release`,
-    /// `slip`, `impact_slip`, `separation`, `landing`, `arm_strike`, `table`.
+    /// `rock_cw` (an impact rocked the object onto its striking vertex, or a catch struck
+    /// a vertex first: the roll over it from the tilt, named by the side the edge is
+    /// tilted to), `release`, `catch`, `bounce` (the caught object left the arm), `slip`,
+    /// `impact_slip`, `separation`, `landing`, `arm_strike`, `table`.
     pub kind: &'static str,
 }
 
