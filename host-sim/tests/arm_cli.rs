@@ -394,7 +394,7 @@ fn the_trace_has_a_row_every_millisecond_and_every_event_of_the_json() {
 }
 
 #[test]
-fn plots_are_written_a_filmstrip_a_trajectory_and_the_friction() {
+fn plots_are_written_a_filmstrip_a_trajectory_the_friction_and_the_torque() {
     for name in TASKS {
         let r = run(name);
         let stems: Vec<String> = r
@@ -402,7 +402,7 @@ fn plots_are_written_a_filmstrip_a_trajectory_and_the_friction() {
             .iter()
             .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
             .collect();
-        let want: Vec<String> = ["filmstrip", "friction", "trajectory"]
+        let want: Vec<String> = ["filmstrip", "friction", "torque", "trajectory"]
             .iter()
             .flat_map(|k| ["png", "svg"].map(|e| format!("{name}-{k}.{e}")))
             .collect();

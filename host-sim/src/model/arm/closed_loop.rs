@@ -198,8 +198,13 @@ pub fn track(
     };
     let dt = sys.tracking.dt_s;
     let planned = plan.motion(&sys.rest_move());
-    // past the verifier's end (settled + hold) by a few periods
-    let steps = ((planned.settled_s() + sys.task.hold_s) / dt).ceil() as usize + 5;
+    // past the verifier's end (settled + hold, or a catch + hold) by a few periods
+    let caught_s = match sys.task.kind.catches() {
+        true => plan.phases.last().map_or(0.0, |p| p.start_s + p.duration_s),
+        false => 0.0,
+    };
+    let end_s = planned.settled_s().max(caught_s) + sys.task.hold_s;
+    let steps = (end_s / dt).ceil() as usize + 5;
     let m = TrackedMotion {
         plant,
         dt_s: dt,

@@ -19,7 +19,7 @@ pub const ROLL: &str = include_str!("../../../../scenes/arm-roll.toml");
 /// `scenes/arm-rolling-throw.toml`.
 pub const ROLLING_THROW: &str = include_str!("../../../../scenes/arm-rolling-throw.toml");
 
-/// `scenes/arm-throw-catch.toml` (not in [`ALL`]: its tracked catch still misses).
+/// `scenes/arm-throw-catch.toml` (not in [`ALL`]: its tracked catch slips at the plan's own mu).
 pub const THROW_CATCH: &str = include_str!("../../../../scenes/arm-throw-catch.toml");
 
 /// All four, with their names.
