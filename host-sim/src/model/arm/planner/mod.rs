@@ -211,17 +211,6 @@ pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
         evaluations += s.evaluations;
         let e = problem.evaluate(&s.x, false);
         let (w, kind) = worst(&e);
-        if std::env::var_os("DEXTER_DEBUG_PLAN").is_some() {
-            let bad: Vec<_> = e
-                .constraints
-                .iter()
-                .zip(&e.kinds)
-                .enumerate()
-                .filter(|(_, (c, _))| **c > FEASIBILITY_TOL)
-                .map(|(i, (c, k))| format!("{i}:{k}={c:.3e}"))
-                .collect();
-            eprintln!("start {k}: {} {:?}", s.status, bad);
-        }
         if w > FEASIBILITY_TOL {
             if w < least_bad.0 {
                 least_bad = (w, kind, s.status.clone());
