@@ -1,9 +1,9 @@
 //! The throw and catch (`scenes/arm-throw-catch.toml`) in the loop: `ArmController` in
-//! the firmware (QEMU `mps2-an386`) tracks the throw, its release brake and the hold at
+//! the firmware (QEMU `mps2-an386`) tracks the throw, its bang-bang move to the catch and the hold at
 //! the catching angle; the whole tracked trajectory equals SIL's bit for bit, every step
 //! within the controller's instruction budget, and so the verification of the tracked
-//! catch is the same. (Whether that tracked catch succeeds is not asserted: it still
-//! comes down 0.029 rad from flat, docs/arm.md "Limits".)
+//! catch is the same. (Whether that tracked catch succeeds is not asserted here: at the
+//! plan's own mu it slips, docs/arm.md "Limits".)
 
 use dexter_core::arm_control::ArmController;
 use dexter_core::fixed_rate::FixedRate;

@@ -2,8 +2,7 @@
 //! the last tracked catch left the square, sent to the firmware (QEMU `mps2-an386`) as a
 //! new `Configure`, and tracked by its `ArmController`. The chain of cycles, every
 //! tracked trajectory bit for bit and every verdict, equals the same chain closed in SIL,
-//! every step within the controller's instruction budget. (How many cycles the tracked
-//! chain catches in a row is not asserted here: docs/arm.md, "Limits".)
+//! every step within the controller's instruction budget, and every cycle is caught.
 
 use dexter_core::arm_control::ArmController;
 use dexter_core::fixed_rate::FixedRate;
@@ -56,5 +55,10 @@ fn the_juggle_tracked_on_the_target_equals_sil_cycle_by_cycle_bit_for_bit() {
     for (k, (a, b)) in hil_motions.iter().zip(&sil_motions).enumerate() {
         assert_eq!(bits(a), bits(b), "cycle {k}'s tracked trajectory");
     }
-    assert!(sil_chain.completed >= 1, "{:?}", sil_chain.cycles.last());
+    assert_eq!(
+        sil_chain.completed,
+        scene.task.cycles,
+        "every cycle caught: {:?}",
+        sil_chain.cycles.last()
+    );
 }

@@ -227,7 +227,10 @@ pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
     };
     problem.watch = None;
     let e = problem.evaluate(&s.x, true);
-    let d = problem.layout.decode(&s.x);
+    let mut d = problem.layout.decode(&s.x);
+    if sys.task.kind.catches() {
+        on_grid(&mut d, &problem.layout.phases, sys.tracking.dt_s);
+    }
     let dense = super::simulate::execute_with(
         sys,
         &problem.motion(&d),
@@ -270,6 +273,31 @@ pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
         status: s.status,
         samples: e.trace,
     })
+}
+
+/// A catch's plan: stretch the design's spline (by under half a control period in all) so
+/// that it ends a
+/// hundredth of a period before an instant of the control grid of period `dt_s`: the
+/// fixed-rate controller then switches to the move after the trajectory at that instant,
+/// where the plan does (its f32 time is past the end there whatever its rounding),
+/// instead of up to a period late. A throw released a period late by an arm still
+/// accelerating leaves faster, and a caught object comes down turned (docs/arm.md, "The
+/// juggle"). The phase times before the release stretch with it; the verifier then judges
+/// this design, and `mu_required` is what it needs. Only for a catch: the stretch moves a
+/// throw's landing too (by 12 mm for the rolling throw planned without its
+/// centre-of-pressure margin, past a throw's 10 mm tolerance), and a throw that is not
+/// caught is not sensitive to the turn it lands with.
+fn on_grid(d: &mut layout::Design, phases: &[Phase], dt_s: f64) {
+    let segments = d.points_rad.len().saturating_sub(3).max(1) as f64;
+    let t = segments * d.segment_s;
+    let end = ((t / dt_s).round().max(1.0) - 0.01) * dt_s;
+    let scale = end / t;
+    d.segment_s = end / segments;
+    for (p, time) in phases.iter().zip(&mut d.times_s) {
+        if *p != Phase::Flight {
+            *time *= scale;
+        }
+    }
 }
 
 /// Why no start gave a plan, in words: the constraint the closest start violated most, by
