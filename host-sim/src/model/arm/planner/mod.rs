@@ -229,7 +229,7 @@ pub fn plan(sys: &ArmScene) -> Result<Plan, ArmError> {
     let e = problem.evaluate(&s.x, true);
     let mut d = problem.layout.decode(&s.x);
     if sys.task.kind.catches() {
-        on_grid(&mut d, &problem.layout.phases, sys.tracking.dt_s);
+        on_grid(&mut d, problem.layout.phases, sys.tracking.dt_s);
     }
     let dense = super::simulate::execute_with(
         sys,
