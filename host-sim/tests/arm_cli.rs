@@ -311,6 +311,49 @@ fn the_roll_ends_with_a_one_sided_impact_and_the_rocks_are_reported() {
     assert_eq!(rocks, impacts.len() - 1);
 }
 
+/// The paper's no-rebound law as a named option (`object.impact_law = "no_rebound"`): the
+/// roll's end stops the frame outright, which needs the impulse's resultant where a stop
+/// puts it, `2 rho^2 / a` behind the edge's first vertex (off the edge: a pull; hand
+/// derivation in docs/arm.md, "Impacts"); the run flags it (`pulls`, `pulling_impacts`).
+/// Under the default one-sided law nothing pulls.
+#[test]
+fn the_no_rebound_law_is_a_named_option_and_every_pull_it_needs_is_flagged() {
+    let out = ok(&[
+        "run",
+        &scene("arm-roll"),
+        "--json",
+        "--set",
+        "object.impact_law=\"no_rebound\"",
+    ]);
+    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["impact_law"], "no_rebound");
+    let impacts = j["impacts"].as_array().unwrap();
+    let first = &impacts[0];
+    assert_eq!(first["outcome"], "grasp");
+    assert_eq!(first["pulls"], true, "{first}");
+    let (a, rho2) = (0.1, 0.0577f64.powi(2));
+    assert!(
+        (f(&first["cop_m"]) + 2.0 * rho2 / a).abs() < 1e-9,
+        "{first}"
+    );
+    assert!(f(&first["cop_margin_m"]) < 0.0);
+    let pulled = impacts.iter().filter(|i| i["pulls"] == true).count();
+    assert_eq!(j["pulling_impacts"], pulled);
+    assert!(pulled >= 1);
+    let text = ok(&[
+        "run",
+        &scene("arm-roll"),
+        "--set",
+        "object.impact_law=\"no_rebound\"",
+    ]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("only by pulling"));
+    let r = run("arm-roll");
+    assert_eq!(r.json["impact_law"], "one_sided");
+    assert_eq!(r.json["pulling_impacts"], 0);
+    let impacts = r.json["impacts"].as_array().unwrap();
+    assert!(impacts.iter().all(|i| i["pulls"] == false), "{impacts:?}");
+}
+
 /// With the planner's centre-of-pressure margin (`planner.cop_margin`, default 0.02 of
 /// the edge) the rolling throw executes exactly its planned phases, grasp, roll, flight;
 /// with no margin its plan grazes the vertex, tips early, falls back and tips again

@@ -56,11 +56,25 @@
 
 use super::contact::{Pivot, Placement, Rig};
 use super::geometry::V2;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Speed below which a rock's lifting vertex counts as at rest, m/s: the impact then
 /// settles the object on the edge (the rocks shrink geometrically; this ends the series).
 pub const SETTLE_SPEED_MPS: f64 = 1e-3;
+
+/// Which impact law the verifier applies (`object.impact_law`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ImpactLaw {
+    /// `"one_sided"`: impulses only push; a stop they cannot make rocks the object onto
+    /// the striking vertex (module docs).
+    #[default]
+    OneSided,
+    /// `"no_rebound"`: the paper's assumption, every impact stops the object outright on
+    /// the struck edge, with a pull where pushing cannot do it; each such impact is
+    /// flagged (`pulls` in the JSON, `pulling_impacts` in the summary).
+    NoRebound,
+}
 
 /// What a one-sided impact of an edge did to the object.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -102,6 +116,9 @@ pub struct EdgeImpact {
     pub cop_m: f64,
     /// Where a stop outright would need it, from vertex k, m (off the edge: it would pull).
     pub stop_cop_m: f64,
+    /// A stop outright's impulse per unit mass along the normal and the tangent, m/s
+    /// (`Pi = -v`: what the paper's no-rebound law applies).
+    pub stop_impulse_mps: (f64, f64),
     /// Edge length L, m.
     pub edge_length_m: f64,
     /// Normal speed of the fastest-approaching end of the edge before, m/s (>= 0).
@@ -140,6 +157,27 @@ impl EdgeImpact {
         }
     }
 
+    /// The same impact under the paper's no-rebound law ([`ImpactLaw::NoRebound`]): the
+    /// object stopped outright on the edge, whatever the impulse had to do; its centre of
+    /// pressure off the edge ([`pulls`](Self::pulls)) is a pull.
+    pub fn stopped_outright(self) -> Self {
+        let (pn, pt) = self.stop_impulse_mps;
+        Self {
+            outcome: Outcome::Grasp,
+            impulse_normal_mps: pn,
+            impulse_tangential_mps: pt,
+            cop_m: self.stop_cop_m,
+            rate_after_radps: 0.0,
+            ..self
+        }
+    }
+
+    /// Whether the impulse's resultant lies off the edge: impulses that only push cannot
+    /// put it there, so it needed a pull (only under [`ImpactLaw::NoRebound`]).
+    pub fn pulls(&self) -> bool {
+        !(0.0..=self.edge_length_m).contains(&self.cop_m)
+    }
+
     /// Distance of the executed impulse's centre of pressure from the nearer end of the
     /// edge, m (negative: off the edge).
     pub fn cop_margin_m(&self) -> f64 {
@@ -173,6 +211,7 @@ impl Rig {
                 impulse_tangential_mps: pt,
                 cop_m: stop_cop_m,
                 stop_cop_m,
+                stop_impulse_mps: (pn, pt),
                 edge_length_m: l,
                 speed_mps,
                 rate_before_radps: omega,
@@ -205,6 +244,7 @@ impl Rig {
             impulse_tangential_mps: pt,
             cop_m,
             stop_cop_m,
+            stop_impulse_mps: axes(stop),
             edge_length_m: l,
             speed_mps,
             rate_before_radps: omega,
@@ -279,6 +319,7 @@ impl Rig {
             impulse_tangential_mps: pi.dot(t),
             cop_m: pv.sigma_m - p.sigma_m,
             stop_cop_m: stop_sigma - p.sigma_m,
+            stop_impulse_mps: (stop.dot(n), stop.dot(t)),
             edge_length_m: l,
             speed_mps,
             rate_before_radps: omega,

@@ -195,6 +195,8 @@ pub struct ArmScene {
     pub bounds: JointBounds,
     /// Where the object lies at the start.
     pub start: Placement,
+    /// The impact law the verifier applies.
+    pub impact_law: impact::ImpactLaw,
     /// The task.
     pub task: Task,
     /// Planner settings.

@@ -129,6 +129,9 @@ pub struct ObjectTable {
     pub edge: usize,
     /// `position_m`: surface coordinate of that edge's midpoint, m (0.9).
     pub position_m: f64,
+    /// `impact_law`: `"one_sided"` (impulses only push) or `"no_rebound"` (the paper's:
+    /// every impact stops the object outright, pulls flagged).
+    pub impact_law: super::impact::ImpactLaw,
 }
 
 impl Default for ObjectTable {
@@ -141,6 +144,7 @@ impl Default for ObjectTable {
             surface: SurfaceKind::Link,
             edge: 0,
             position_m: 0.9,
+            impact_law: super::impact::ImpactLaw::OneSided,
         }
     }
 }
@@ -367,6 +371,7 @@ impl ArmConfig {
             mass_kg: self.object.mass_kg,
             bounds,
             start,
+            impact_law: self.object.impact_law,
             task,
             planner,
             tracking,

@@ -12,7 +12,7 @@ use crate::controller::StepController;
 use crate::model::arm::closed_loop::{sil_controller, track, TrackedMotion, TrackingReport};
 use crate::model::arm::contact::Joint;
 use crate::model::arm::geometry::V2;
-use crate::model::arm::impact::Outcome;
+use crate::model::arm::impact::{ImpactLaw, Outcome};
 use crate::model::arm::motion::ArmMotion;
 use crate::model::arm::planner::evaluate::PlanSample;
 use crate::model::arm::planner::{plan, PhaseSpan, Plan};
@@ -118,6 +118,11 @@ pub struct ArmSummary {
     pub arm_outline: Vec<V2>,
     /// Events of the verified run.
     pub events: Vec<Event>,
+    /// The impact law the verifier applied (`object.impact_law`).
+    pub impact_law: ImpactLaw,
+    /// Impacts of the verified run whose impulse pulled (the no-rebound law only; 0 under
+    /// the one-sided law, whose impulses only push).
+    pub pulling_impacts: usize,
     /// Every impact of the verified run (an edge on the surface): the one-sided law's
     /// outcome (`grasp` or a `rock`), its impulse, the impulse's centre of pressure with its
     /// margin to the edge's ends, and the friction it needs.
@@ -153,6 +158,8 @@ pub struct ImpactSummary {
     pub stop_cop_m: f64,
     /// The edge's length, m.
     pub edge_length_m: f64,
+    /// The impulse's resultant is off the edge: it pulled (only under the no-rebound law).
+    pub pulls: bool,
     /// |Pi_t| / Pi_n.
     pub friction_ratio: f64,
     /// Relative rate before and after, rad/s.
@@ -190,6 +197,7 @@ impl From<&ImpactRecord> for ImpactSummary {
             cop_margin_m: i.cop_margin_m(),
             stop_cop_m: i.stop_cop_m,
             edge_length_m: i.edge_length_m,
+            pulls: i.pulls(),
             friction_ratio: i.friction_ratio(),
             rate_before_radps: i.rate_before_radps,
             rate_after_radps: i.rate_after_radps,
@@ -298,6 +306,8 @@ fn summarize(
         frames: ok.frames,
         arm_outline: arm_outline(sys),
         events: ok.events,
+        impact_law: sys.impact_law,
+        pulling_impacts: ok.impacts.iter().filter(|r| r.impact.pulls()).count(),
         impacts: ok.impacts.iter().map(ImpactSummary::from).collect(),
         catch: ok
             .catch_index

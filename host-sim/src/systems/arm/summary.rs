@@ -209,6 +209,12 @@ impl ArmOutcome {
         }
         o += &format!("  events:      {}\n", events.join(", "));
         o += &impact_line(&s.impacts);
+        if s.pulling_impacts > 0 {
+            o += &format!(
+                "  pulls:       {} impact(s) stopped the object outright only by pulling (object.impact_law = \"no_rebound\", the paper's assumption)\n",
+                s.pulling_impacts
+            );
+        }
         o
     }
 

@@ -8,7 +8,7 @@ use super::{
 use crate::engine::locate::bisect;
 use crate::model::arm::contact::{BodyState, Pivot, Placement};
 use crate::model::arm::geometry::wrap_pi;
-use crate::model::arm::impact::{EdgeImpact, Outcome, SETTLE_SPEED_MPS};
+use crate::model::arm::impact::{EdgeImpact, ImpactLaw, Outcome, SETTLE_SPEED_MPS};
 use crate::model::arm::task::Phase;
 
 /// How far below the table top the arm may carry the object before the table takes it
@@ -127,6 +127,10 @@ impl Runner<'_> {
     /// what it did.
     fn apply_impact(&mut self, te: f64, onto: Placement, imp: EdgeImpact) {
         let rig = &self.sys.rig;
+        let imp = match self.sys.impact_law {
+            ImpactLaw::OneSided => imp,
+            ImpactLaw::NoRebound => imp.stopped_outright(),
+        };
         self.out.impacts.push(ImpactRecord {
             t_s: te,
             edge: onto.edge,
