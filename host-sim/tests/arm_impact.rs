@@ -322,8 +322,9 @@ fn a_square_dropped_on_its_corner_turns_back_toward_flat() {
     }
 }
 
-/// The SIL-tracked catch of `scenes/arm-throw-catch.toml` (the state `dexter run
-/// scenes/arm-throw-catch.toml` meets at t = 1.0257 s, copied here): the square comes down
+/// A tilted catch state (the one an earlier SIL run of `scenes/arm-throw-catch.toml` met
+/// at t = 1.0257 s against a frozen arm, copied here; today's run comes down flat): the
+/// square comes down
 /// with edge 3 tilted 0.0288 rad from flat, beyond `FLAT_TOL_RAD`, so vertex 3 strikes
 /// alone. Recomputed here from the world state without the code under test: relative to
 /// the arm and in its frame, `r = R(-theta) r_w`, `v = R(-theta) (v_w - theta' J r_w)`,
