@@ -364,6 +364,44 @@ fn assert_every_fault_path_cuts_the_motor_first(elf: &Path) {
     assert_eq!(feeders, [addr("TIM2")], "the watchdog's feeders");
 }
 
+/// DBGMCU's values in the linked image (`fault::DEXTER_DBGMCU`, written at init; the
+/// emulator, which does not model DBGMCU, shows that the three registers are written,
+/// `host-sim/tests/board_hil.rs`), against RM0390 sec. 33.16.2-4: `CR` keeps the debug
+/// port up in sleep, stop and standby (bits 0, 1, 2); while the core is halted `APB1_FZ`
+/// stops TIM2 (bit 0) and the IWDG (bit 12), `APB2_FZ` stops TIM1, the motor's PWM (bit 0).
+fn assert_a_halted_core_stops_the_motor_and_the_watchdog(elf: &[u8]) {
+    let addr = symbol(elf, "DEXTER_DBGMCU").expect("DEXTER_DBGMCU in the image");
+    assert_eq!(symbol_size(elf, "DEXTER_DBGMCU"), Some(12));
+    let words: Vec<u32> = bytes_at(elf, addr, 12)
+        .expect("DEXTER_DBGMCU's bytes")
+        .chunks(4)
+        .map(|w| u32::from_le_bytes(w.try_into().unwrap()))
+        .collect();
+    let (cr, apb1, apb2) = (words[0], words[1], words[2]);
+    let (dbg_sleep, dbg_stop, dbg_standby) = (1 << 0, 1 << 1, 1 << 2);
+    assert_eq!(
+        cr & (dbg_sleep | dbg_stop | dbg_standby),
+        0b111,
+        "DBGMCU_CR {cr:#x}"
+    );
+    let (dbg_tim2_stop, dbg_iwdg_stop, dbg_tim1_stop) = (1 << 0, 1 << 12, 1 << 0);
+    assert_eq!(
+        apb1 & dbg_tim2_stop,
+        dbg_tim2_stop,
+        "APB1_FZ {apb1:#x}: TIM2"
+    );
+    assert_eq!(
+        apb1 & dbg_iwdg_stop,
+        dbg_iwdg_stop,
+        "APB1_FZ {apb1:#x}: IWDG"
+    );
+    assert_eq!(
+        apb2 & dbg_tim1_stop,
+        dbg_tim1_stop,
+        "APB2_FZ {apb2:#x}: TIM1"
+    );
+}
+
 /// One test, so the image is built once: golden sizes, budgets, documents, the scene.
 #[test]
 fn the_board_image_builds_fits_its_budgets_and_matches_the_expected_sizes() {
@@ -376,6 +414,7 @@ fn the_board_image_builds_fits_its_budgets_and_matches_the_expected_sizes() {
     );
     assert_the_board_runs_the_scenes_controller(&bytes);
     assert_every_fault_path_cuts_the_motor_first(&elf);
+    assert_a_halted_core_stops_the_motor_and_the_watchdog(&bytes);
     let s = sizes(&elf);
     let actual = sizes_text(&s);
     let expected_path = board_dir().join("expected/sizes.txt");

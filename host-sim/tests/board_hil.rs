@@ -92,14 +92,69 @@ struct Emulator {
     camera: UnixStream,
 }
 
+/// A write QEMU logged to a device it does not model (`-d unimp,guest_errors`): the
+/// device's name as QEMU gives it, the register's offset, and the value (none for the
+/// system region's unassigned registers, whose writes QEMU logs without it).
+#[derive(Debug)]
+struct DeviceWrite {
+    device: String,
+    offset: u64,
+    value: Option<u64>,
+}
+
+/// One line of QEMU's device log, if it is a write: `NAME: unimplemented device write
+/// (size 4, offset 0x034, value 0x00000001)` or `Write of unassigned area of PPB: offset
+/// 0x42004`.
+fn device_write(line: &str) -> Option<DeviceWrite> {
+    let hex = |t: &str| u64::from_str_radix(t.trim().trim_start_matches("0x"), 16).ok();
+    if let Some(offset) = line.strip_prefix("Write of unassigned area of PPB: offset ") {
+        return Some(DeviceWrite {
+            device: "PPB".into(),
+            offset: hex(offset)?,
+            value: None,
+        });
+    }
+    let (device, rest) = line.split_once(": unimplemented device write (")?;
+    let field = |key: &str| {
+        let at = rest.find(key)? + key.len();
+        hex(rest[at..].split([',', ')']).next()?)
+    };
+    Some(DeviceWrite {
+        device: device.into(),
+        offset: field("offset ")?,
+        value: Some(field("value ")?),
+    })
+}
+
 impl Emulator {
     /// Boot `elf` in netduinoplus2; the port is the one QEMU names on stdout ("char device
     /// redirected to /dev/pts/N").
     fn boot(elf: &Path, name: &str) -> Self {
+        Self::boot_with(elf, name, &[])
+    }
+
+    /// [`Emulator::boot`], with QEMU logging every write to a device it does not model
+    /// (TIM1, the GPIOs, the IWDG, DBGMCU) to `devices.log` ([`Emulator::writes_since`]),
+    /// and `words` (address, value) written to memory before the core starts (QEMU's
+    /// generic `loader` device).
+    fn boot_logging_devices(elf: &Path, name: &str, words: &[(u64, u32)]) -> Self {
+        let mut extra: Vec<String> = ["-d", "unimp,guest_errors", "-D", "devices.log"]
+            .map(String::from)
+            .into();
+        for (addr, value) in words {
+            extra.push("-device".into());
+            extra.push(format!("loader,addr={addr:#x},data={value:#x},data-len=4"));
+        }
+        Self::boot_with(elf, name, &extra)
+    }
+
+    fn boot_with(elf: &Path, name: &str, extra: &[String]) -> Self {
         let dir = common::scratch(name);
         let (monitor, camera) = (dir.join("monitor.sock"), dir.join("camera.sock"));
         let unix = |p: &Path| format!("unix:{},server=on,wait=off", p.display());
         let mut qemu = Command::new("qemu-system-arm")
+            .current_dir(&dir)
+            .args(extra)
             .args(["-machine", "netduinoplus2", "-nographic"])
             .args(["-monitor", &unix(&monitor), "-serial", &unix(&camera)])
             .args(["-serial", "pty", "-kernel"])
@@ -171,6 +226,21 @@ impl Emulator {
             .unwrap_or_else(|| panic!("xp: {answer:?}"))
             + key.len();
         u32::from_str_radix(&answer[at..at + 8], 16).unwrap()
+    }
+
+    /// The device log's length, bytes: a mark for [`Emulator::writes_since`].
+    fn log_mark(&self) -> u64 {
+        std::fs::metadata(self.dir.join("devices.log")).map_or(0, |m| m.len())
+    }
+
+    /// The device writes QEMU logged after `mark` ([`Emulator::boot_logging_devices`]).
+    fn writes_since(&self, mark: u64) -> Vec<DeviceWrite> {
+        let log = std::fs::read(self.dir.join("devices.log")).expect("QEMU's device log");
+        let from = usize::try_from(mark).unwrap().min(log.len());
+        String::from_utf8_lossy(&log[from..])
+            .lines()
+            .filter_map(device_write)
+            .collect()
     }
 
     /// Poll the word at `addr` until it is `want` (true) or `wait` has passed (false).
@@ -332,18 +402,158 @@ fn every_hosted_kind_runs_on_the_emulated_board_bit_for_bit_against_sil() {
     assert_eq!(report.sil_mismatches, 0, "{report:?}");
 }
 
-/// Each fault path the emulator can run ends with the motor cut, `fault::DEXTER_MOTOR_OFF`
-/// holding its cause: a byte `0xF1..=0xF5` on USART1 provokes one (`fault_hooks.rs`,
-/// `qemu-hsi` only), and the monitor resets the board between them. The stack overflow
-/// ends in a HardFault only because the MPU guard leaves it room to stack its frame:
-/// without the guard the core locks up and the word stays 0. (The motor cut itself writes
-/// TIM1 and GPIOA, which QEMU does not model: `tests/board.rs` checks on the linked image
-/// that each handler calls it first, and that only the control task feeds the watchdog.)
+/// TIM1 (the motor's PWM, QEMU's `timer[1]`) and GPIOA (PA8, the driver's PWM input):
+/// registers and bits of RM0390 (sec. 8.4, 12.4).
+const TIM1: &str = "timer[1]";
+const TIM1_CCR1: u64 = 0x34;
+const TIM1_BDTR: u64 = 0x44;
+const BDTR_MOE: u64 = 1 << 15;
+const BDTR_OSSI: u64 = 1 << 10;
+const GPIOA: &str = "GPIOA";
+const GPIO_MODER: u64 = 0x00;
+const GPIO_BSRR: u64 = 0x18;
+/// IWDG (RM0390 sec. 19.4): key, prescaler and reload registers, and the keys. QEMU 7.2
+/// maps its unimplemented `I2S2ext` at the IWDG's address too, and names the region so.
+const IWDG_KR: u64 = 0x0;
+const IWDG_PR: u64 = 0x4;
+const IWDG_RLR: u64 = 0x8;
+const KEY_FEED: u64 = 0xAAAA;
+const KEY_UNLOCK: u64 = 0x5555;
+const KEY_START: u64 = 0xCCCC;
+/// The LSI that clocks the IWDG, nominal, Hz (RM0390 sec. 6.2.5).
+const LSI_HZ: f64 = 32_000.0;
+
+fn is_iwdg(device: &str) -> bool {
+    device == "IWDG" || device == "I2S2ext"
+}
+
+fn is(w: &DeviceWrite, device: &str, offset: u64) -> bool {
+    w.device == device && w.offset == offset
+}
+
+/// The motor cut among `writes`: PA8 set low (BSRR's BR8) before it becomes a GPIO output
+/// (MODER8 = 01), so it never drives high on the way; TIM1's duty 0 and its main output
+/// off with OSSI (an off-state output held at its idle level). After the cut, nothing
+/// drives the motor again: no duty, no output enable, PA8 not handed back to TIM1.
+fn assert_motor_cut(what: &str, writes: &[DeviceWrite]) {
+    let find = |device: &str, offset: u64, ok: &dyn Fn(u64) -> bool| {
+        writes
+            .iter()
+            .position(|w| is(w, device, offset) && w.value.is_some_and(ok))
+            .unwrap_or_else(|| panic!("{what}: no {device} write at {offset:#x}: {writes:?}"))
+    };
+    let low = find(GPIOA, GPIO_BSRR, &|v| v == 1 << 24);
+    let output = find(GPIOA, GPIO_MODER, &|v| (v >> 16) & 0b11 == 0b01);
+    let duty_zero = find(TIM1, TIM1_CCR1, &|v| v == 0);
+    let outputs_idle = find(TIM1, TIM1_BDTR, &|v| {
+        v & BDTR_MOE == 0 && v & BDTR_OSSI != 0
+    });
+    assert!(
+        low < output,
+        "{what}: PA8 became an output before it was set low"
+    );
+    let cut = low.max(output).max(duty_zero).max(outputs_idle);
+    for w in &writes[cut + 1..] {
+        let v = w.value.unwrap_or(0);
+        let drives = (is(w, TIM1, TIM1_CCR1) && v != 0)
+            || (is(w, TIM1, TIM1_BDTR) && v & BDTR_MOE != 0)
+            || (is(w, GPIOA, GPIO_MODER) && (v >> 16) & 0b11 != 0b01)
+            || (is(w, GPIOA, GPIO_BSRR) && v & (1 << 8) != 0);
+        assert!(!drives, "{what}: the motor is driven after the cut: {w:?}");
+    }
+}
+
+/// The juggling loop's IWDG and motor writes on a board that has just booted: DBGMCU's
+/// three registers written, the watchdog started with a 20 ms timeout at the LSI's nominal
+/// 32 kHz (`WATCHDOG_MS`) and fed; the duties it commands returned.
+fn assert_the_watchdog_runs(writes: &[DeviceWrite]) {
+    for register in [0x42004, 0x42008, 0x4200c] {
+        assert!(
+            writes.iter().any(|w| is(w, "PPB", register)),
+            "DBGMCU at {register:#x} is not written at boot"
+        );
+    }
+    let iwdg: Vec<(u64, u64)> = writes
+        .iter()
+        .filter(|w| is_iwdg(&w.device))
+        .map(|w| (w.offset, w.value.unwrap()))
+        .collect();
+    let at = |want: (u64, u64)| iwdg.iter().position(|&w| w == want);
+    let (unlock, start) = (at((IWDG_KR, KEY_UNLOCK)), at((IWDG_KR, KEY_START)));
+    assert!(
+        unlock.is_some() && start.is_some(),
+        "IWDG not started: {iwdg:?}"
+    );
+    let register = |offset| iwdg.iter().find(|w| w.0 == offset).map(|w| w.1).unwrap();
+    let (prescaler, reload) = (register(IWDG_PR), register(IWDG_RLR));
+    let timeout_s = (reload + 1) as f64 * (4u64 << prescaler) as f64 / LSI_HZ;
+    assert!(
+        (timeout_s - 0.020).abs() < 1e-9,
+        "IWDG timeout {timeout_s} s"
+    );
+    assert!(feeds(writes) > 10, "the control task feeds the watchdog");
+}
+
+/// How many times `writes` feed the watchdog.
+fn feeds(writes: &[DeviceWrite]) -> usize {
+    writes
+        .iter()
+        .filter(|w| is_iwdg(&w.device) && w.offset == IWDG_KR && w.value == Some(KEY_FEED))
+        .count()
+}
+
+/// The duties (TIM1's CCR1) `writes` command.
+fn duties(writes: &[DeviceWrite]) -> Vec<u64> {
+    writes
+        .iter()
+        .filter(|w| is(w, TIM1, TIM1_CCR1))
+        .filter_map(|w| w.value)
+        .collect()
+}
+
+/// Each fault path ends with the motor's outputs at their idle level, read from the writes
+/// QEMU logs to TIM1 and GPIOA (devices it does not model, so it logs them):
+/// - a HardFault, a panic, a stack overflow, an NMI and an unhandled interrupt: a byte
+///   `0xF1..=0xF5` on USART1 provokes one (`fault_hooks.rs`, `qemu-hsi` only), and
+///   `fault::DEXTER_MOTOR_OFF` holds its cause. The stack overflow ends in a HardFault
+///   only because the MPU guard leaves it room to stack its frame: without the guard the
+///   core locks up and the word stays 0;
+/// - a hung control task (`0xF6`): the watchdog's feeds and the duties stop. QEMU models
+///   neither the IWDG's expiry nor RCC's reset flags; the test boots the image again with
+///   the hook's stand-in for RCC's watchdog flag set, and the board keeps the motor parked
+///   at duty 0 while it feeds the watchdog again (after a plain boot it drives the motor).
+///   Before that, the log shows the watchdog started with a 20 ms timeout and DBGMCU's
+///   three registers written (their values: `tests/board.rs`).
+///
+/// (`tests/board.rs` checks on the linked image that each handler calls the cut first, and
+/// that only the control task feeds the watchdog.)
 #[test]
 fn each_fault_path_on_the_emulated_board_ends_with_the_motor_off() {
     let elf = emulated_board_image();
     let motor_off = symbol_address(&elf, "DEXTER_MOTOR_OFF");
-    let mut board = Emulator::boot(&elf, "board-faults");
+    let mut board = Emulator::boot_logging_devices(&elf, "board-faults", &[]);
+    std::thread::sleep(Duration::from_millis(1000));
+    let booted = board.writes_since(0);
+    assert_the_watchdog_runs(&booted);
+    assert!(
+        duties(&booted).iter().any(|&d| d != 0),
+        "the juggling loop drives the motor after a plain boot"
+    );
+    board.camera.write_all(&[0xF6]).unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    let mark = board.log_mark();
+    std::thread::sleep(Duration::from_millis(700));
+    let hung = board.writes_since(mark);
+    assert_eq!(
+        feeds(&hung),
+        0,
+        "a hung control task still feeds the watchdog"
+    );
+    assert!(
+        duties(&hung).is_empty(),
+        "a hung control task still drives the motor"
+    );
+
     // (hook byte, Cause as u32 in boards/nucleo-f446re/src/fault.rs, what)
     let faults = [
         (0xF1, 1, "HardFault from a bus error"),
@@ -354,19 +564,39 @@ fn each_fault_path_on_the_emulated_board_ends_with_the_motor_off() {
     ];
     for (byte, cause, what) in faults {
         board.monitor("system_reset");
-        // the reset handler zeroes .bss: the word is 0 once the image runs again
         assert!(
             board.word_becomes(motor_off, 0, BOOT_TIMEOUT),
             "{what}: the board did not boot again"
         );
-        std::thread::sleep(Duration::from_millis(200)); // init enables USART1's interrupt
+        std::thread::sleep(Duration::from_millis(300)); // init enables USART1's interrupt
+        let mark = board.log_mark();
         board.camera.write_all(&[byte]).unwrap();
         assert!(
             board.word_becomes(motor_off, cause, Duration::from_secs(5)),
             "{what}: DEXTER_MOTOR_OFF is {}, not {cause}",
             board.word(motor_off)
         );
+        std::thread::sleep(Duration::from_millis(300));
+        assert_motor_cut(what, &board.writes_since(mark));
     }
+    drop(board);
+
+    // The watchdog's reset, with RCC's flag as the hook's stand-in (a fresh QEMU: its
+    // TIM2 does not tick again after an emulated reset, firmware/README.md, "Emulation").
+    let flag = symbol_address(&elf, "DEXTER_EMULATED_WATCHDOG_RESET");
+    let board = Emulator::boot_logging_devices(&elf, "board-watchdog", &[(flag, 0x5744_4f47)]);
+    std::thread::sleep(Duration::from_millis(1000));
+    let parked = board.writes_since(0);
+    assert_the_watchdog_runs(&parked);
+    let duty = duties(&parked);
+    assert!(
+        duty.len() > 10,
+        "the control task keeps the motor parked: {duty:?}"
+    );
+    assert!(
+        duty.iter().all(|&d| d == 0),
+        "after a watchdog reset the motor is driven: duties {duty:?}"
+    );
 }
 
 /// `dexter board`: the camera the board's stand-alone loop needs for a scene. The line

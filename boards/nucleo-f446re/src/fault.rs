@@ -77,6 +77,29 @@ pub fn idle_level_when_off(tim1: &stm32f4xx_hal::pac::tim1::RegisterBlock) {
     tim1.cr2().modify(|_, w| w.ois1().clear_bit());
 }
 
+/// What DBGMCU's `CR`, `APB1_FZ` and `APB2_FZ` (RM0390, sec. 33.16) get at init, in that
+/// order: while a debugger holds the core halted, TIM1 (the motor PWM, APB2 bit 0), TIM2
+/// (the control tick, APB1 bit 0) and the independent watchdog (APB1 bit 12) stop, so a
+/// halted core neither keeps driving the motor nor is reset under the debugger; and the
+/// debug port stays up in sleep (`wfi` in `idle`), stop and standby (CR bits 0 to 2).
+/// Unmangled, so that `tests/board.rs` reads the values from the linked image (QEMU does
+/// not model DBGMCU: the emulator test sees only that the three registers are written).
+#[no_mangle]
+#[used]
+pub static DEXTER_DBGMCU: [u32; 3] = [0b111, 1 | 1 << 12, 1];
+
+/// Set DBGMCU from [`DEXTER_DBGMCU`] (each register's other bits kept).
+pub fn freeze_on_halt(dbgmcu: &stm32f4xx_hal::pac::DBGMCU) {
+    // Safety: a volatile read of a static, so the values are the image's as linked.
+    let [cr, apb1, apb2] = unsafe { core::ptr::read_volatile(&DEXTER_DBGMCU) };
+    // Safety: every bit set here is a documented freeze or debug-in-low-power bit.
+    unsafe {
+        dbgmcu.cr().modify(|r, w| w.bits(r.bits() | cr));
+        dbgmcu.apb1_fz().modify(|r, w| w.bits(r.bits() | apb1));
+        dbgmcu.apb2_fz().modify(|r, w| w.bits(r.bits() | apb2));
+    }
+}
+
 /// The MPU guard at the bottom of the stack region (`_stack_end`, the lowest stack
 /// address): region 0, read-only, `STACK_GUARD_BYTES` long; the default memory map stays
 /// in force elsewhere (PRIVDEFENA), and the MPU is off in HardFault and NMI (HFNMIENA = 0).

@@ -181,23 +181,10 @@ mod app {
         #[cfg(feature = "qemu-hsi")]
         let clocks = Clocks::hsi().sysclk(SYSCLK_HZ.Hz());
         let watchdog_reset = dp.RCC.csr().read().wdgrstf().bit_is_set();
+        #[cfg(feature = "qemu-hsi")]
+        let watchdog_reset = crate::fault_hooks::take_emulated_watchdog_reset() || watchdog_reset;
         dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
-        // Debugging: TIM1 (the motor PWM), TIM2 (the tick) and the watchdog stop while the
-        // core is halted; the debug port stays up in `wfi` (sleep), stop and standby.
-        dp.DBGMCU.cr().modify(|_, w| {
-            w.dbg_sleep()
-                .set_bit()
-                .dbg_stop()
-                .set_bit()
-                .dbg_standby()
-                .set_bit()
-        });
-        dp.DBGMCU
-            .apb1_fz()
-            .modify(|_, w| w.dbg_tim2_stop().set_bit().dbg_iwdg_stop().set_bit());
-        dp.DBGMCU
-            .apb2_fz()
-            .modify(|_, w| w.dbg_tim1_stop().set_bit());
+        crate::fault::freeze_on_halt(&dp.DBGMCU);
         crate::fault::guard_stack(&mut core.MPU);
         let mut rcc = dp.RCC.freeze(clocks);
         let steps = DwtCycles::new(&mut core.DCB, &mut core.DWT);
