@@ -322,8 +322,9 @@ fn first_call_reaches(g: &CallGraph, entry: u64, goal: u64) -> bool {
 /// The fault paths, read from the linked image where the emulator cannot show them (it
 /// does not model TIM1, the GPIOs or the IWDG; `host-sim/tests/board_hil.rs` shows the
 /// paths it can run end in the motor cut): the HardFault (where a stack overflow and a
-/// panic's `udf` end), the unhandled-interrupt handler, the NMI and both panic handlers
-/// call `dexter_motor_off` before anything else; the watchdog is fed from the control
+/// panic's `udf` end), the unhandled-interrupt handler, the NMI, both limit switches'
+/// interrupts (EXTI0, EXTI1) and both panic handlers call `dexter_motor_off` before
+/// anything else; the watchdog is fed from the control
 /// task (TIM2's handler) and nowhere else, so a hung control task is reset.
 fn assert_every_fault_path_cuts_the_motor_first(elf: &Path) {
     let g = call_graph(elf);
@@ -345,6 +346,8 @@ fn assert_every_fault_path_cuts_the_motor_first(elf: &Path) {
         "HardFault",
         "DefaultHandler",
         "NonMaskableInt",
+        "EXTI0",
+        "EXTI1",
         "_defmt_panic",
         &panic_handler,
     ] {

@@ -513,8 +513,8 @@ fn duties(writes: &[DeviceWrite]) -> Vec<u64> {
 
 /// Each fault path ends with the motor's outputs at their idle level, read from the writes
 /// QEMU logs to TIM1 and GPIOA (devices it does not model, so it logs them):
-/// - a HardFault, a panic, a stack overflow, an NMI and an unhandled interrupt: a byte
-///   `0xF1..=0xF5` on USART1 provokes one (`fault_hooks.rs`, `qemu-hsi` only), and
+/// - a HardFault, a panic, a stack overflow, an NMI, an unhandled interrupt and a limit
+///   switch's interrupt: a byte `0xF1..=0xF5`, `0xF7` on USART1 provokes one (`fault_hooks.rs`, `qemu-hsi` only), and
 ///   `fault::DEXTER_MOTOR_OFF` holds its cause. The stack overflow ends in a HardFault
 ///   only because the MPU guard leaves it room to stack its frame: without the guard the
 ///   core locks up and the word stays 0;
@@ -561,6 +561,7 @@ fn each_fault_path_on_the_emulated_board_ends_with_the_motor_off() {
         (0xF3, 1, "stack overflow"),
         (0xF4, 3, "NMI"),
         (0xF5, 4, "unhandled interrupt"),
+        (0xF7, 5, "limit switch"),
     ];
     for (byte, cause, what) in faults {
         board.monitor("system_reset");

@@ -43,6 +43,8 @@ pub enum Cause {
     Nmi = 3,
     /// An interrupt without a handler.
     UnhandledInterrupt = 4,
+    /// A limit switch opened (`limits`).
+    LimitSwitch = 5,
 }
 
 /// Cut the motor by register (the HAL objects belong to tasks that no longer run), with
@@ -133,6 +135,17 @@ pub fn guard_stack(mpu: &mut cortex_m::peripheral::MPU) {
 unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
     motor_off(Cause::HardFault);
     defmt::error!("HardFault at pc={=u32:#010x}; motor off", frame.pc());
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// A limit switch opened: motor off, then stay (interrupts masked: the watchdog, no longer
+/// fed, resets the part, which keeps the motor parked after the reset). Called first by
+/// the EXTI0 and EXTI1 handlers (`main.rs`).
+pub fn limit_switch_opened(which: &str) -> ! {
+    motor_off(Cause::LimitSwitch);
+    defmt::error!("limit switch ({=str} end) open; motor off", which);
     loop {
         cortex_m::asm::wfi();
     }

@@ -1,5 +1,5 @@
 //! Emulator test hooks (feature `qemu-hsi` only, never in the real image): a byte
-//! `0xF1..=0xF6` on USART1 (the camera's line, which the emulator test attaches to a
+//! `0xF1..=0xF7` on USART1 (the camera's line, which the emulator test attaches to a
 //! socket) provokes one fault path, so that `host-sim/tests/board_hil.rs` sees each one end
 //! with the motor off. The byte is also in the camera ring, where the camera's parser
 //! skips it as noise.
@@ -26,6 +26,9 @@ const UNHANDLED_INTERRUPT: u8 = 0xF5;
 /// A hung control task: this interrupt (priority 3, above the control task's 2) never
 /// returns, so the watchdog is no longer fed.
 const HANG: u8 = 0xF6;
+/// The lower limit switch opening: its interrupt (EXTI0) set pending, as the pin's rising
+/// edge would (QEMU does not model the GPIOs, so no pin can rise).
+const LIMIT_SWITCH: u8 = 0xF7;
 
 /// The emulated watchdog reset flag, in RAM the reset handler leaves as it is (`.uninit`:
 /// neither loaded nor zeroed), so a value put there before the core starts survives into
@@ -68,6 +71,9 @@ pub fn on_camera_byte(last: Option<u8>) {
             // Safety: SPI2 has no handler: a deliberate DefaultHandler.
             unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::SPI2) };
             cortex_m::peripheral::NVIC::pend(Interrupt::SPI2);
+        }
+        Some(LIMIT_SWITCH) => {
+            cortex_m::peripheral::NVIC::pend(stm32f4xx_hal::pac::Interrupt::EXTI0)
         }
         Some(HANG) => loop {
             core::hint::spin_loop();

@@ -33,6 +33,7 @@ use defmt_rtt as _; // global logger: defmt over RTT, read by probe-rs
 mod fault;
 #[cfg(feature = "qemu-hsi")]
 mod fault_hooks;
+mod limits;
 mod report;
 mod rig;
 mod tick;
@@ -138,6 +139,7 @@ mod app {
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::Config as Clocks;
     use stm32f4xx_hal::serial::{Config as SerialConfig, Rx, Serial, Tx};
+    use stm32f4xx_hal::syscfg::SysCfgExt;
     use stm32f4xx_hal::timer::{CounterHz, Event, Flag};
     use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
@@ -191,6 +193,12 @@ mod app {
         let server_steps = DwtCycles::new(&mut core.DCB, &mut core.DWT);
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
+        let gpioc = dp.GPIOC.split(&mut rcc);
+        let mut syscfg = dp.SYSCFG.constrain(&mut rcc);
+        let mut exti = dp.EXTI;
+        let limits =
+            crate::limits::LimitSwitches::new(gpioc.pc0, gpioc.pc1, &mut syscfg, &mut exti);
+        let limit_open = limits.open();
 
         let (Some((vcp_ring, vcp_consumer)), Some((camera_ring, camera_consumer))) =
             (uart_ring::split(&VCP_RING), uart_ring::split(&CAMERA_RING))
@@ -242,6 +250,11 @@ mod app {
         if watchdog_reset {
             defmt::error!("reset by the watchdog: the motor stays parked (HIL still runs)");
         }
+        if limit_open {
+            defmt::error!(
+                "a limit switch is open at reset: the motor stays parked (HIL still runs)"
+            );
+        }
         let mut watchdog = IndependentWatchdog::new(dp.IWDG);
         watchdog.start(WATCHDOG_MS.millis());
         let server = Server::with_hook(
@@ -264,7 +277,7 @@ mod app {
             camera_ring,
             server,
             watchdog,
-            parked: watchdog_reset,
+            parked: watchdog_reset || limit_open,
         };
         (shared, local)
     }
@@ -306,6 +319,18 @@ mod app {
     #[task(binds = USART2, priority = 3, local = [vcp_rx, vcp_ring], shared = [step_window])]
     fn vcp_receive(cx: vcp_receive::Context) {
         let _ = uart_ring::on_receive(cx.local.vcp_rx, cx.local.vcp_ring, &VCP_ERRORS);
+    }
+
+    /// The lower limit switch opened: motor off for good (`limits`).
+    #[task(binds = EXTI0, priority = 4)]
+    fn lower_limit(_: lower_limit::Context) {
+        crate::fault::limit_switch_opened("lower")
+    }
+
+    /// The upper limit switch opened: motor off for good (`limits`).
+    #[task(binds = EXTI1, priority = 4)]
+    fn upper_limit(_: upper_limit::Context) {
+        crate::fault::limit_switch_opened("upper")
     }
 
     /// The camera's receive interrupt: bytes into the ring.
