@@ -110,6 +110,12 @@ impl<Q: QuadratureCounter> PaddleEncoder<Q> {
         })
     }
 
+    /// The position at the last [`PaddleEncoder::sample`], counts from where it started
+    /// (what calibration reads: metres per count is a distance over this difference).
+    pub fn counts(&self) -> i64 {
+        self.last_counts
+    }
+
     /// Read the encoder once per control period: height and velocity.
     pub fn sample(&mut self) -> PaddleSample {
         let counts = self.encoder.update();

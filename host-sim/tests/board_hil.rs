@@ -50,23 +50,29 @@ fn workspace() -> PathBuf {
 /// `dexter-nucleo-f446re-qemu-hsi.elf`, so that a later build of the real image (the size
 /// test, `scripts/test.sh`) does not replace it.
 fn emulated_board_image() -> PathBuf {
+    emulated_image_with("qemu-hsi")
+}
+
+/// [`emulated_board_image`] with `features` (`qemu-hsi` among them), copied as
+/// `dexter-nucleo-f446re-<features, commas as dashes>.elf`.
+fn emulated_image_with(features: &str) -> PathBuf {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let out = Command::new(cargo)
         .current_dir(workspace())
         .args(["build", "-p", CRATE, "--release", "--target", TARGET])
-        .args(["--features", "qemu-hsi"])
+        .args(["--features", features])
         .output()
         .expect("cargo runs");
     assert!(
         out.status.success(),
-        "building {CRATE} --features qemu-hsi failed (install the target with `rustup target add {TARGET}`):\n{}",
+        "building {CRATE} --features {features} failed (install the target with `rustup target add {TARGET}`):\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map(|d| workspace().join(d))
         .unwrap_or_else(|| workspace().join("target"));
     let release = target.join(TARGET).join("release");
-    let copy = release.join(format!("{CRATE}-qemu-hsi.elf"));
+    let copy = release.join(format!("{CRATE}-{}.elf", features.replace(',', "-")));
     std::fs::copy(release.join(CRATE), &copy).expect("copy the emulated board's image");
     copy
 }
@@ -597,6 +603,67 @@ fn each_fault_path_on_the_emulated_board_ends_with_the_motor_off() {
     assert!(
         duty.iter().all(|&d| d == 0),
         "after a watchdog reset the motor is driven: duties {duty:?}"
+    );
+}
+
+/// One camera frame as the camera sends it (firmware/README.md, step 4): `A5 5A seq flags
+/// x y crc8`, x and y in 1/16 px (u16 LE), flags bit 0 = ball found, CRC-8/SMBUS (poly
+/// 0x07, init 0) over the six bytes from `seq`. Written here from that description, not
+/// with the drivers' encoder.
+fn camera_frame(seq: u8, found: bool, x_px16: u16, y_px16: u16) -> Vec<u8> {
+    let mut body = vec![seq, u8::from(found)];
+    body.extend(x_px16.to_le_bytes());
+    body.extend(y_px16.to_le_bytes());
+    let mut crc = 0u8;
+    for &b in &body {
+        crc ^= b;
+        for _ in 0..8 {
+            crc = if crc & 0x80 != 0 {
+                (crc << 1) ^ 0x07
+            } else {
+                crc << 1
+            };
+        }
+    }
+    [vec![0xA5, 0x5A], body, vec![crc]].concat()
+}
+
+/// The calibration image (`--features calibrate`) reads the camera's frames raw (row and
+/// column as sent, in `DEXTER_CALIBRATION`), feeds the watchdog, and never drives the
+/// motor: every duty it writes to TIM1 is 0.
+#[test]
+fn the_calibration_image_reads_the_sensors_raw_and_never_drives_the_motor() {
+    let elf = emulated_image_with("qemu-hsi,calibrate");
+    let readout = symbol_address(&elf, "DEXTER_CALIBRATION");
+    let mut board = Emulator::boot_logging_devices(&elf, "board-calibrate", &[]);
+    std::thread::sleep(Duration::from_millis(300)); // init enables USART1's interrupt
+    let (x, y) = (5144, 1972); // 321.5 px, 123.25 px
+    board
+        .camera
+        .write_all(&camera_frame(7, true, x, y))
+        .unwrap();
+    assert!(
+        board.word_becomes(readout + 4, 1, Duration::from_secs(5)),
+        "the calibration image parsed no frame: {} frames",
+        board.word(readout + 4)
+    );
+    assert_eq!(board.word(readout + 8), u32::from(y), "row, 1/16 px");
+    assert_eq!(board.word(readout + 12), u32::from(x), "column, 1/16 px");
+    assert_eq!(board.word(readout + 16), 1, "ball found");
+    std::thread::sleep(Duration::from_millis(500));
+    let writes = board.writes_since(0);
+    let duty = duties(&writes);
+    assert!(
+        feeds(&writes) > 10,
+        "the calibration image feeds the watchdog"
+    );
+    assert!(
+        duty.len() > 10,
+        "the control task keeps the motor parked: {duty:?}"
+    );
+    assert!(
+        duty.iter().all(|&d| d == 0),
+        "the calibration image drives the motor: {duty:?}"
     );
 }
 

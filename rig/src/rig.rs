@@ -4,7 +4,7 @@
 
 use dexter_core::protocol::{ActuatorCommand, SensorFrame};
 use dexter_drivers::actuator::{Drive, DriveError, PaddleDrive};
-use dexter_drivers::camera::{Camera, CameraStats, RowToHeight};
+use dexter_drivers::camera::{Camera, CameraFrame, CameraStats, RowToHeight};
 use dexter_drivers::encoder::{PaddleEncoder, PaddleSample, QuadratureCounter};
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
@@ -44,6 +44,7 @@ pub struct LineRig<Q, R, P, D> {
     ball_height_m: f32,
     paddle: PaddleSample,
     last_drive: Option<Drive>,
+    last_image: Option<CameraFrame>,
 }
 
 impl<Q, R, P, D> LineRig<Q, R, P, D>
@@ -70,6 +71,7 @@ where
             ball_height_m: f32::NAN,
             paddle: PaddleSample::default(),
             last_drive: None,
+            last_image: None,
         }
     }
 
@@ -81,6 +83,17 @@ where
     /// The last paddle sample.
     pub fn paddle(&self) -> PaddleSample {
         self.paddle
+    }
+
+    /// The encoder's position at the last [`Rig::sense`], counts from reset.
+    pub fn paddle_counts(&self) -> i64 {
+        self.encoder.counts()
+    }
+
+    /// The newest camera image [`Rig::sense`] has read, raw (row and column in px), for
+    /// calibration; none before the first.
+    pub fn last_image(&self) -> Option<CameraFrame> {
+        self.last_image
     }
 
     /// The last drive written (direction and duty counts).
@@ -103,6 +116,7 @@ where
     fn sense(&mut self) -> SensorFrame {
         self.paddle = self.encoder.sample();
         if let Some(image) = self.camera.poll() {
+            self.last_image = Some(image);
             if self.camera_seq != Some(image.seq) {
                 self.camera_seq = Some(image.seq);
                 self.seq = self.seq.wrapping_add(1);
@@ -203,10 +217,13 @@ mod tests {
         let cal = RowToHeight::new(400.0, 0.01).unwrap();
         let mut rig = LineRig::new(encoder, Camera::new(uart.clone()), cal, drive);
 
+        assert_eq!(rig.last_image(), None);
         let f = rig.sense();
         assert_eq!(f.seq, 1);
         assert!((f.ball_height_m - 1.0).abs() < 1e-6);
         assert!((f.paddle_height_m - 0.01).abs() < 1e-7);
+        assert_eq!(rig.paddle_counts(), 100);
+        assert_eq!(rig.last_image().map(|i| (i.seq, i.y_px)), Some((5, 300.0)));
         assert!((f.paddle_velocity_mps - 5.0).abs() < 1e-5);
         let command = ActuatorCommand {
             paddle_accel_mps2: 50.0,
@@ -228,6 +245,8 @@ mod tests {
         let f = rig.sense(); // image 5 repeated, then image 6 without a ball
         assert_eq!(f.seq, 2);
         assert!(f.ball_height_m.is_nan());
+        assert_eq!(rig.last_image().map(|i| (i.seq, i.found)), Some((6, false)));
+        assert_eq!(rig.paddle_counts(), 400);
         assert_eq!(rig.camera_stats().frames, 4);
         uart.done();
         pwm.done();

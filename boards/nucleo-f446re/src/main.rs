@@ -30,6 +30,8 @@
 use defmt_rtt as _; // global logger: defmt over RTT, read by probe-rs
                     // The panic handlers are `fault`'s: motor off first.
 
+#[cfg(feature = "calibrate")]
+mod calibrate;
 mod fault;
 #[cfg(feature = "qemu-hsi")]
 mod fault_hooks;
@@ -56,6 +58,10 @@ pub const VCP_BAUD: u32 = 921_600;
 /// The independent watchdog's timeout, ms: 10 control periods (the LSI that clocks it is
 /// 17 to 47 kHz on the F4, so the real timeout is 7 to 19 ms). Fed by the control task only.
 pub const WATCHDOG_MS: u32 = 20;
+
+/// The calibration image (feature `calibrate`): the motor parked from reset, the sensors
+/// read raw (`calibrate`).
+const CALIBRATING: bool = cfg!(feature = "calibrate");
 
 /// Set when the lock-step server accepts a host's `Configure` ([`HostSession`]): a host
 /// drives the board from now. (Unmangled for a debugger and the emulator test.)
@@ -125,7 +131,9 @@ mod app {
     use crate::report::Report;
     use crate::rig::{self, BoardRig, Tim3Encoder, CAMERA_BAUD, PWM_HZ};
     use crate::tick::TickClock;
-    use crate::{HostSession, CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD, WATCHDOG_MS};
+    use crate::{
+        HostSession, CALIBRATING, CONTROL_RATE_HZ, HOST_SESSION, SYSCLK_HZ, VCP_BAUD, WATCHDOG_MS,
+    };
     use core::sync::atomic::Ordering;
     use dexter_core::control::{Controller, ControllerParams};
     use dexter_core::fixed_rate::FixedRate;
@@ -250,6 +258,9 @@ mod app {
         if watchdog_reset {
             defmt::error!("reset by the watchdog: the motor stays parked (HIL still runs)");
         }
+        if CALIBRATING {
+            defmt::info!("calibration image: the motor stays parked; the sensors are logged raw");
+        }
         if limit_open {
             defmt::error!(
                 "a limit switch is open at reset: the motor stays parked (HIL still runs)"
@@ -277,7 +288,7 @@ mod app {
             camera_ring,
             server,
             watchdog,
-            parked: watchdog_reset || limit_open,
+            parked: watchdog_reset || limit_open || CALIBRATING,
         };
         (shared, local)
     }
@@ -352,6 +363,10 @@ mod app {
             local.tick.clear_flags(Flag::Update);
             if local.rig.park().is_err() {
                 defmt::error!("the motor could not be parked");
+            }
+            #[cfg(feature = "calibrate")]
+            if !HOST_SESSION.load(Ordering::Relaxed) {
+                crate::calibrate::sample(local.rig);
             }
             if !*local.parked {
                 defmt::info!(
