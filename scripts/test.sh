@@ -77,6 +77,7 @@ cargo clippy --all-targets -- -D warnings
 cargo clippy -p dexter-firmware --target "$TARGET" -- -D warnings
 cargo clippy -p dexter-nucleo-f446re --target "$TARGET" -- -D warnings
 cargo clippy -p dexter-nucleo-f446re --target "$TARGET" --features qemu-hsi -- -D warnings
+cargo clippy -p dexter-nucleo-f446re --target "$TARGET" --features qemu-hsi,calibrate -- -D warnings
 
 step "the core builds for $TARGET with each math backend"
 cargo build -p dexter-core --target "$TARGET"

@@ -27,23 +27,40 @@ fn board_dir() -> PathBuf {
     root().join("boards/nucleo-f446re")
 }
 
-/// Build the board image (release) and return its ELF.
-fn board_elf() -> PathBuf {
+/// The image's feature sets all link to one path: one build (and copy) at a time.
+static BUILD: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// `cargo ARGS` from the workspace root, which must succeed (`what` names it on failure).
+fn cargo(args: &[&str], what: &str) {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let out = Command::new(cargo)
         .current_dir(root())
-        .args(["build", "-p", CRATE, "--release", "--target", TARGET])
+        .args(args)
         .output()
         .expect("run cargo");
     assert!(
         out.status.success(),
-        "building {CRATE} failed:\n{}",
+        "{what} (cargo {}) failed:\n{}",
+        args.join(" "),
         String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Build the board image (release) and return a copy of its ELF
+/// (`dexter-nucleo-f446re-product.elf`, which another feature set's build does not replace).
+fn board_elf() -> PathBuf {
+    let _one_at_a_time = BUILD.lock().unwrap_or_else(|e| e.into_inner());
+    cargo(
+        &["build", "-p", CRATE, "--release", "--target", TARGET],
+        "building the board image",
     );
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map(|d| root().join(d))
         .unwrap_or_else(|| root().join("target"));
-    target.join(TARGET).join("release").join(CRATE)
+    let release = target.join(TARGET).join("release");
+    let copy = release.join(format!("{CRATE}-product.elf"));
+    std::fs::copy(release.join(CRATE), &copy).expect("copy the board image");
+    copy
 }
 
 /// Section sizes the way `size` (Berkeley) counts them, and the reserved stack.
@@ -442,6 +459,45 @@ fn the_board_image_builds_fits_its_budgets_and_matches_the_expected_sizes() {
     let table = size_table(&expected);
     check_block(&root().join("firmware/README.md"), &table);
     check_block(&root().join("BENCHMARKS.md"), &table);
+}
+
+/// Every cargo alias that builds or runs a firmware image (`.cargo/config.toml`, as
+/// firmware/README.md documents them: `fw`, `board-flash`, `board-emu`, `board-calibrate`
+/// and their `-build` forms) builds from the workspace root. A `run` alias is built as
+/// `build` with the same arguments: running flashes a board through a probe, or boots QEMU
+/// until it is stopped (the emulated board's boot is `host-sim/tests/board_hil.rs`'s, the
+/// runner's choice of machine the test below). The host alias `board-hil` is the CLI's
+/// `run SCENE --hil --port`, which `board_hil.rs` runs.
+#[test]
+fn every_firmware_alias_builds_from_the_workspace_root() {
+    let config = std::fs::read_to_string(root().join(".cargo/config.toml")).unwrap();
+    let config: toml::Table = toml::from_str(&config).expect(".cargo/config.toml parses");
+    let aliases = config["alias"].as_table().expect("an [alias] table");
+    let mut built = Vec::new();
+    for (name, value) in aliases {
+        let command = value.as_str().expect("an alias is one string");
+        let words: Vec<&str> = command
+            .split_whitespace()
+            .take_while(|&w| w != "--")
+            .collect();
+        if !words.contains(&TARGET) {
+            continue;
+        }
+        let (verb, args) = words.split_first().unwrap();
+        assert!(
+            matches!(*verb, "run" | "build"),
+            "alias {name}: `{command}`"
+        );
+        let _one_at_a_time = BUILD.lock().unwrap_or_else(|e| e.into_inner());
+        cargo(&[&["build"], args].concat(), &format!("alias {name}"));
+        built.push(name.clone());
+    }
+    for documented in ["fw", "board-flash", "board-emu", "board-calibrate"] {
+        assert!(
+            built.iter().any(|b| b == documented),
+            "no alias {documented}: {built:?}"
+        );
+    }
 }
 
 /// The camera-side sketch (`boards/nucleo-f446re/camera/frames.py`) encodes the frame the

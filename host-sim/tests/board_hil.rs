@@ -56,6 +56,10 @@ fn emulated_board_image() -> PathBuf {
 /// [`emulated_board_image`] with `features` (`qemu-hsi` among them), copied as
 /// `dexter-nucleo-f446re-<features, commas as dashes>.elf`.
 fn emulated_image_with(features: &str) -> PathBuf {
+    // Every feature set links to the same path: build and copy one at a time (the tests
+    // of this file run in parallel threads).
+    static BUILD: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = BUILD.lock().unwrap_or_else(|e| e.into_inner());
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let out = Command::new(cargo)
         .current_dir(workspace())
