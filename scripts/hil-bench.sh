@@ -19,8 +19,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 out=target/hil-bench
 mkdir -p "$out"
-elf=target/thumbv7em-none-eabihf/release/dexter-firmware
-build() { cargo build -q -p dexter-firmware --release --target thumbv7em-none-eabihf "$@"; }
+elf=target/thumbv7em-none-eabihf/release/dexter-mps2-an386
+build() { cargo build -q -p dexter-mps2-an386 --release --target thumbv7em-none-eabihf "$@"; }
 build --features fast-math && cp "$elf" "$out/fast-math.elf"
 build --features bench && cp "$elf" "$out/bench.elf"
 build --features tilt-backend-sincos && cp "$elf" "$out/tilt-libm.elf"

@@ -7,8 +7,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p dexter-sim
-cargo build -q -p dexter-firmware --release --target thumbv7em-none-eabihf
-elf=${1:-target/thumbv7em-none-eabihf/release/dexter-firmware}
+cargo build -q -p dexter-mps2-an386 --release --target thumbv7em-none-eabihf
+elf=${1:-target/thumbv7em-none-eabihf/release/dexter-mps2-an386}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 qemu=$(command -v qemu-system-arm)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The runner of every thumbv7em-none-eabihf binary cargo runs from the workspace root
 # (.cargo/config.toml), chosen by the image:
-#   dexter-firmware             -> QEMU mps2-an386 (the QEMU image; `cargo fw`)
+#   dexter-mps2-an386           -> QEMU mps2-an386 (the QEMU image; `cargo fw`)
 #   dexter-nucleo-f446re        -> probe-rs: flash the NUCLEO-F446RE and print its defmt log
 #   the same with `qemu-hsi`    -> QEMU netduinoplus2, USART2 (the host link) on a
 #                                  pseudo-terminal it names (`cargo board-emu`)

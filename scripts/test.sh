@@ -74,7 +74,7 @@ python3 scripts/layers.py
 
 step "lints (cargo clippy -D warnings), host crates and firmware"
 cargo clippy --all-targets -- -D warnings
-cargo clippy -p dexter-firmware --target "$TARGET" -- -D warnings
+cargo clippy -p dexter-firmware -p dexter-mps2-an386 --target "$TARGET" -- -D warnings
 cargo clippy -p dexter-nucleo-f446re --target "$TARGET" -- -D warnings
 cargo clippy -p dexter-nucleo-f446re --target "$TARGET" --features qemu-hsi -- -D warnings
 cargo clippy -p dexter-nucleo-f446re --target "$TARGET" --features qemu-hsi,calibrate -- -D warnings
@@ -85,11 +85,11 @@ cargo build -p dexter-core --target "$TARGET" --features fast-math
 
 step "the firmware images build for $TARGET (release): the arm image, then the default one"
 # Each image is a cargo feature selection of hosted kinds (firmware/README.md, "Images").
-cargo build -p dexter-firmware --release --target "$TARGET" --no-default-features --features arm
-FW="target/$TARGET/release/dexter-firmware"
-ARM_FW="target/$TARGET/release/dexter-firmware-arm.elf"
+cargo build -p dexter-mps2-an386 --release --target "$TARGET" --no-default-features --features arm
+FW="target/$TARGET/release/dexter-mps2-an386"
+ARM_FW="target/$TARGET/release/dexter-mps2-an386-arm.elf"
 cp "$FW" "$ARM_FW"
-cargo build -p dexter-firmware --release --target "$TARGET"
+cargo build -p dexter-mps2-an386 --release --target "$TARGET"
 
 step "static worst-case control steps, from each image as flashed (scripts/wcet.py)"
 python3 scripts/wcet_test.py

@@ -555,7 +555,7 @@ fn the_runner_flashes_the_board_image_and_emulates_the_others() {
             "qemu-system-arm -machine netduinoplus2",
         ),
         (
-            image("dexter-firmware", b"\x7fELF qemu"),
+            image("dexter-mps2-an386", b"\x7fELF qemu"),
             "qemu-system-arm -machine mps2-an386",
         ),
     ];

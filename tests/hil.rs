@@ -13,8 +13,8 @@
 //! controller (`Echo`) to prove the driver generic over the controller kind, and a raw
 //! protocol session to check the firmware's refusals (wrong kind, not configured).
 //!
-//! Golden files: `firmware/expected/smoke.txt` (decoded defmt output of the smoke run that
-//! `cargo fw` boots) and `firmware/expected/sizes.txt` (text/data/bss and the stack of the
+//! Golden files: `boards/mps2-an386/expected/smoke.txt` (decoded defmt output of the smoke run that
+//! `cargo fw` boots) and `boards/mps2-an386/expected/sizes.txt` (text/data/bss and the stack of the
 //! release ELF); the size figures in firmware/README.md and BENCHMARKS.md are generated from
 //! them and checked. Regenerate on purpose with `DEXTER_BLESS=1 cargo test -p dexter-tests
 //! --test hil`. The flash and RAM budgets are asserted as bounds, not only diffed.
@@ -367,7 +367,7 @@ fn a_host_side_timeout_is_a_link_error_with_a_clear_message() {
 #[test]
 fn a_missing_firmware_is_an_error_that_names_the_path_and_how_to_build_it() {
     let opts = HilOptions {
-        firmware_elf: PathBuf::from("no/such/dexter-firmware.elf"),
+        firmware_elf: PathBuf::from("no/such/dexter-mps2-an386.elf"),
         ..HilOptions::default()
     };
     let err = LockStep::<Controller>::start(ControllerParams::default(), opts)
@@ -375,7 +375,7 @@ fn a_missing_firmware_is_an_error_that_names_the_path_and_how_to_build_it() {
         .expect("no ELF, no run")
         .to_string();
     assert!(
-        err.contains("no/such/dexter-firmware.elf") && err.contains("cargo fw-build"),
+        err.contains("no/such/dexter-mps2-an386.elf") && err.contains("cargo fw-build"),
         "{err}"
     );
 }
@@ -482,7 +482,7 @@ fn the_link_check_controller_runs_through_the_same_driver() {
 }
 
 /// The semihosting link's firmware polls for frames and, after a few hundred microseconds
-/// without one, sleeps on a doorbell FIFO (`firmware/src/link.rs`): a host that pauses
+/// without one, sleeps on a doorbell FIFO (`boards/mps2-an386/src/semihosting.rs`): a host that pauses
 /// between steps must find it asleep, not spinning, and ring it awake for every step. A
 /// firmware that never sleeps fails the CPU bound and rings nothing; a host that does not
 /// ring the doorbell times out on the first step after a pause.
@@ -524,7 +524,7 @@ fn a_firmware_waiting_on_a_slow_host_sleeps_on_the_doorbell_and_wakes_for_each_f
 // ---- golden files, budgets and the documents generated from them ---------------------------
 
 fn expected_dir() -> PathBuf {
-    hil::workspace_root().join("firmware").join("expected")
+    hil::workspace_root().join("boards/mps2-an386/expected")
 }
 
 fn bless() -> bool {
@@ -691,7 +691,7 @@ fn log_number(log: &str, prefix: &str) -> u64 {
 
 fn sizes_text(s: &ElfSizes) -> String {
     format!(
-        "# dexter-firmware release ELF ({}), bytes; flash = text + data, static RAM = data + bss,\n\
+        "# dexter-mps2-an386 release ELF ({}), bytes; flash = text + data, static RAM = data + bss,\n\
          # stack = the region memory.x reserves (its high-water marks: smoke.txt, BENCHMARKS.md)\n\
          text {}\ndata {}\nbss {}\nflash {}\nstatic_ram {}\nstack_reserved {}\n",
         hil::TARGET,
@@ -784,7 +784,7 @@ fn size_table(sizes: &str, smoke: &str) -> String {
     let kib = |b: u64| format!("{:.1} KiB", b as f64 / 1024.0);
     let (flash, ram, stack) = (get("flash"), get("static_ram"), get("stack_reserved"));
     format!(
-        "<!-- generated from firmware/expected/{{sizes,smoke}}.txt by tests/hil.rs \
+        "<!-- generated from boards/mps2-an386/expected/{{sizes,smoke}}.txt by tests/hil.rs \
          (DEXTER_BLESS=1 regenerates); do not edit -->\n\
          | figure | value | goal |\n| --- | --- | --- |\n\
          | flash (text {} + data {}) | {flash} B = {} | <= 32 KiB (memory.x) |\n\
@@ -807,7 +807,7 @@ fn size_table(sizes: &str, smoke: &str) -> String {
 /// Replace the generated block (from its marker comment to the first blank line) in `doc`.
 fn check_generated_block(doc: &Path, block: &str) {
     let text = std::fs::read_to_string(doc).unwrap();
-    let marker = "<!-- generated from firmware/expected/";
+    let marker = "<!-- generated from boards/mps2-an386/expected/";
     let start = text
         .find(marker)
         .unwrap_or_else(|| panic!("{}: no generated size table", doc.display()));
@@ -821,7 +821,7 @@ fn check_generated_block(doc: &Path, block: &str) {
     assert_eq!(
         &text[start..end],
         block,
-        "{} quotes other figures than firmware/expected/ (DEXTER_BLESS=1 regenerates)",
+        "{} quotes other figures than boards/mps2-an386/expected/ (DEXTER_BLESS=1 regenerates)",
         doc.display()
     );
 }

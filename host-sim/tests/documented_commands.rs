@@ -442,7 +442,7 @@ fn documented_hil_commands_give_the_blessed_output() {
         .args([
             "build",
             "-p",
-            "dexter-firmware",
+            "dexter-mps2-an386",
             "--release",
             "--target",
             "thumbv7em-none-eabihf",

@@ -30,13 +30,13 @@ fn target_dir() -> PathBuf {
     }
 }
 
-/// Where `cargo build -p dexter-firmware --release --target thumbv7em-none-eabihf` puts
+/// Where `cargo build -p dexter-mps2-an386 --release --target thumbv7em-none-eabihf` puts
 /// the firmware ELF.
 pub fn default_firmware_elf() -> PathBuf {
     target_dir()
         .join(TARGET)
         .join("release")
-        .join("dexter-firmware")
+        .join("dexter-mps2-an386")
 }
 
 /// Check that the emulator runs; the error says what to install.
@@ -111,25 +111,25 @@ pub fn llvm_tool(name: &str) -> Result<PathBuf, ControllerError> {
     })
 }
 
-/// Build the firmware (`cargo build -p dexter-firmware --release --target
+/// Build the firmware (`cargo build -p dexter-mps2-an386 --release --target
 /// thumbv7em-none-eabihf` in the workspace root) and return the ELF's path.
 pub fn build_firmware() -> Result<PathBuf, ControllerError> {
     build_firmware_with_features(&[])
 }
 
-/// [`build_firmware`] with cargo features of `dexter-firmware` (e.g. `fast-math`, `bench`);
+/// [`build_firmware`] with cargo features of `dexter-mps2-an386` (e.g. `fast-math`, `bench`);
 /// the ELF is written to the same path.
 pub fn build_firmware_with_features(features: &[&str]) -> Result<PathBuf, ControllerError> {
     cargo_build_firmware(features, true)
 }
 
-/// An image with its own selection of hosted kinds (`dexter-firmware` built with
+/// An image with its own selection of hosted kinds (`dexter-mps2-an386` built with
 /// `--no-default-features --features <features>`, e.g. `["arm"]`: firmware/README.md,
-/// "Images"), copied beside the default ELF as `dexter-firmware-<name>.elf`, so that a
+/// "Images"), copied beside the default ELF as `dexter-mps2-an386-<name>.elf`, so that a
 /// later build of another image does not replace it; returns the copy's path.
 pub fn build_firmware_image(name: &str, features: &[&str]) -> Result<PathBuf, ControllerError> {
     let elf = cargo_build_firmware(features, false)?;
-    let copy = elf.with_file_name(format!("dexter-firmware-{name}.elf"));
+    let copy = elf.with_file_name(format!("dexter-mps2-an386-{name}.elf"));
     std::fs::copy(&elf, &copy).map_err(|e| {
         link_err(format!(
             "cannot copy the {name} image {} to {}: {e}",
@@ -150,7 +150,7 @@ fn cargo_build_firmware(
     cmd.current_dir(workspace_root()).args([
         "build",
         "-p",
-        "dexter-firmware",
+        "dexter-mps2-an386",
         "--release",
         "--target",
         TARGET,
@@ -185,7 +185,7 @@ pub(super) fn resolve_firmware(elf: &Path) -> Result<PathBuf, ControllerError> {
         .ok_or_else(|| {
             link_err(format!(
                 "firmware ELF {} not found: build it with `cargo fw-build` \
-                 (cargo build -p dexter-firmware --release --target {TARGET}) \
+                 (cargo build -p dexter-mps2-an386 --release --target {TARGET}) \
                  or call hil::build_firmware()",
                 elf.display()
             ))

@@ -1,4 +1,4 @@
-//! The host end of the semihosting link (`firmware/src/link.rs` is the other end): three
+//! The host end of the semihosting link (`boards/mps2-an386/src/semihosting.rs` is the other end): three
 //! files in QEMU's private working directory.
 //!
 //! - `dexter-h2d`, a regular file the host appends frames to and the firmware polls: a read

@@ -85,7 +85,7 @@ pub fn firmware() -> PathBuf {
         .args([
             "build",
             "-p",
-            "dexter-firmware",
+            "dexter-mps2-an386",
             "--release",
             "--target",
             "thumbv7em-none-eabihf",
@@ -100,5 +100,5 @@ pub fn firmware() -> PathBuf {
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map(PathBuf::from)
         .unwrap_or_else(|| workspace().join("target"));
-    target.join("thumbv7em-none-eabihf/release/dexter-firmware")
+    target.join("thumbv7em-none-eabihf/release/dexter-mps2-an386")
 }

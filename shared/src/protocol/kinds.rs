@@ -11,7 +11,7 @@
 //! image that hosts the arm): it is last, so the tags before it do not depend on the
 //! feature, and an image without it still names the kind (`Rejection::NotHosted(Kind::Arm)`)
 //! with no code for its values. That gate costs nothing on the host and saves the other
-//! images the arm's encoders (`firmware/memory.x` leaves little flash free).
+//! images the arm's encoders (`boards/mps2-an386/memory.x` leaves little flash free).
 
 #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
 use crate::arm_control::ArmController;

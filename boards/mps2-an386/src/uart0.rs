@@ -6,11 +6,11 @@
 //! receive register into a [`ByteRing`]; reads take from the ring (sleeping in `wfi` while
 //! it is empty), writes poll the transmit-full flag.
 
-use crate::ring::{ByteRing, Consumer, Producer};
 use core::cell::RefCell;
 use core::ptr::{read_volatile, write_volatile};
 use cortex_m::interrupt::{InterruptNumber, Mutex};
 use cortex_m::peripheral::NVIC;
+use dexter_firmware::ring::{ByteRing, Consumer, Producer};
 
 const UART0_BASE: usize = 0x4000_4000;
 const DATA: *mut u32 = UART0_BASE as *mut u32;
@@ -106,11 +106,6 @@ impl Uart0 {
             NVIC::unmask(Irq::Uart0Rx);
         }
         Some(Self { rx })
-    }
-
-    /// Bytes lost because the receive ring was full.
-    pub fn rx_dropped(&self) -> usize {
-        RX_RING.dropped()
     }
 }
 

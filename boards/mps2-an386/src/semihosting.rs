@@ -1,9 +1,9 @@
-//! Plant links that are not tied to a board: semihosting file I/O.
+//! The semihosting plant link: file I/O through the debugger (QEMU) instead of a UART.
 //!
 //! A plant link is any byte stream implementing `embedded_io::{Read, Write}`; the
-//! protocol server ([`crate::server`]) is generic over it. Two implementations exist: the
-//! board's UART (`board::mps2_an386::Uart0`, the real driver path) and the semihosting
-//! files here (fast: one host system call per chunk, no emulated UART).
+//! protocol server (`dexter_firmware::server`) is generic over it. This board offers two:
+//! UART0 ([`crate::uart0::Uart0`], the real driver path) and the semihosting files here
+//! (fast: one host system call per chunk, no emulated UART).
 //!
 //! The semihosting link opens three host paths relative to QEMU's working directory:
 //! - [`HOST_TO_DEVICE_PATH`], a regular file the host appends frames to. Reading it never

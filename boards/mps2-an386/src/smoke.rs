@@ -1,14 +1,15 @@
 //! The smoke run `cargo fw` boots when no host drives a link: it checks the SysTick
 //! instruction ratio with a known instruction sequence, then closes the loop around the
 //! core for a short, deterministic ball drop on the target and logs what happened. Its
-//! output (decoded defmt) is checked in as `firmware/expected/smoke.txt`.
+//! output (decoded defmt) is checked in as `boards/mps2-an386/expected/smoke.txt`.
 
-use crate::board::{StepTimer, SysTickInstructions};
+use crate::systick::SysTickInstructions;
 use cortex_m::peripheral::SYST;
 use dexter_core::control::{Controller, ControllerParams};
 use dexter_core::fixed_rate::FixedRate;
 use dexter_core::fixed_rate::Mode;
 use dexter_core::protocol::SensorFrame;
+use dexter_firmware::board::StepTimer;
 
 /// Control steps of the smoke run (0.6 s at 500 Hz: the ball falls, is hit once, rises).
 pub const SMOKE_STEPS: u32 = 300;
@@ -44,7 +45,7 @@ pub fn run(timer: &SysTickInstructions) -> bool {
     let Some(mode) = ball_drop(timer) else {
         return false;
     };
-    let stack = crate::stack::usage();
+    let stack = dexter_firmware::stack::usage();
     defmt::info!(
         "stack high-water {=u32} of {=u32} bytes",
         stack.used_bytes,

@@ -1,11 +1,9 @@
-//! Puts `firmware/memory.x` on the linker search path (cortex-m-rt's `link.x` includes
+//! Puts `boards/mps2-an386/memory.x` on the linker search path (cortex-m-rt's `link.x` includes
 //! it), through a copy in `OUT_DIR`. (It is not at the workspace root: rustc links with the
 //! workspace root as its working directory, where the linker would find it first.)
 //!
-//! The search path is a link argument of this package's binaries only
-//! (`rustc-link-arg-bins`), not a `rustc-link-search` (which cargo hands on to every crate
-//! that depends on this one): a board crate that links the library (e.g.
-//! `boards/nucleo-f446re`) brings its own `memory.x`, and must not find this one.
+//! The search path is a link argument of this package's binary only
+//! (`rustc-link-arg-bins`): each board crate brings its own `memory.x`.
 //!
 //! `memory.x` cuts flash to the product's 32 KiB budget, so the linker refuses an image
 //! that does not fit. The `bench` feature builds a measurement tool, not the product (it
@@ -23,7 +21,7 @@ const DEVICE_X: &str = "/* mps2-an386: every interrupt goes to DefaultHandler (s
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("set by cargo"));
     let source = manifest.join("memory.x");
-    let mut memory = std::fs::read_to_string(&source).expect("firmware/memory.x");
+    let mut memory = std::fs::read_to_string(&source).expect("boards/mps2-an386/memory.x");
     if std::env::var_os("CARGO_FEATURE_BENCH").is_some() {
         let product = "FLASH : ORIGIN = 0x00000000, LENGTH = 32K";
         assert!(

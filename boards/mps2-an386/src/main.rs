@@ -1,5 +1,5 @@
 //! Boots the firmware. The semihosting command line (QEMU `-append`) picks the mode:
-//! - nothing: the smoke run ([`dexter_firmware::smoke`]), what `cargo fw` shows;
+//! - nothing: the smoke run ([`smoke`]), what `cargo fw` shows;
 //! - `semihosting`: lock-step server on the semihosting file link;
 //! - `uart`: lock-step server on UART0;
 //! - `freerun`: free-running fixed-rate mode on UART0 (500 Hz on SysTick, link timeout
@@ -11,8 +11,8 @@
 //!
 //! This binary also holds what a QEMU run needs once (knurling app-template style): the
 //! defmt global logger (semihosting stdout), the panic handler and a `HardFault` handler
-//! that both end the run with a failure status, and [`exit`]. The library
-//! (`dexter_firmware`) holds none of them, so a real board links its own (RTT, panic-probe).
+//! that both end the run with a failure status, and [`exit`]. The board-neutral library
+//! (`dexter_firmware`) holds none of them, nor semihosting: a real board links its own.
 #![no_std]
 #![no_main]
 #![deny(unsafe_op_in_unsafe_fn)]
@@ -21,15 +21,22 @@ use defmt_semihosting as _; // global logger: defmt frames on semihosting stdout
 
 use cortex_m::peripheral::SYST;
 use cortex_m_rt::{entry, exception};
-use dexter_firmware::board::{mps2_an386, SysTickInstructions};
-use dexter_firmware::link::{command_line, LinkError, SemihostingLink};
 use dexter_firmware::server::{Exit, FreeRunning, Server};
+use semihosting::{command_line, LinkError, SemihostingLink};
+use systick::SysTickInstructions;
+use uart0 as mps2_an386;
+
+#[cfg(feature = "bench")]
+mod bench;
+mod semihosting;
+mod smoke;
+mod systick;
+mod uart0;
 
 /// Control rate of the free-running mode, Hz.
 const FREE_RUNNING_RATE_HZ: u32 = 500;
 /// Periods without a valid sensor frame before the free-running mode's safe state.
 const FREE_RUNNING_TIMEOUT_PERIODS: u32 = 5;
-use dexter_firmware::smoke;
 
 /// The plant links this board offers, as one type so the server is compiled once.
 enum PlantLink {
@@ -153,7 +160,7 @@ fn main() -> ! {
         }
         BootMode::Bench => {
             #[cfg(feature = "bench")]
-            exit(dexter_firmware::bench::run(&timer));
+            exit(bench::run(&timer));
             #[cfg(not(feature = "bench"))]
             {
                 defmt::error!("built without the `bench` feature");

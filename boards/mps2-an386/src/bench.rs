@@ -3,8 +3,9 @@
 //! `libm::sqrtf`, measured with the same SysTick/icount method as the control step; where
 //! the control step's instructions go; and what the wire protocol costs per frame.
 
-use crate::board::{StepTimer, SysTickInstructions};
+use crate::systick::SysTickInstructions;
 use core::hint::black_box;
+use dexter_firmware::board::StepTimer;
 
 /// Arguments spread over a few periods (the cost of range reduction depends on them).
 const ARGS: [f32; 8] = [0.1, 0.7, 1.3, 2.9, -0.4, -2.2, 5.5, 12.0];
@@ -72,11 +73,11 @@ pub fn run(timer: &SysTickInstructions) -> bool {
 /// the host's sensor frame byte by byte (COBS, CRC-32C, postcard) and encoding its answer,
 /// for each controller kind; and the CRC alone per byte.
 pub fn protocol_costs(timer: &SysTickInstructions) {
-    use crate::server::HostMessage as Decoded;
     use dexter_core::fixed_rate::Telemetry;
     use dexter_core::protocol::{
         encode, Command, DeviceMessage, Frame, FrameDecoder, HostMessage, Kind, MAX_FRAME_LEN,
     };
+    use dexter_firmware::server::HostMessage as Decoded;
     for &kind in Kind::ALL {
         // A kind this image leaves off the wire has no frame to measure.
         let (Some(frame), Some(command)) = (Frame::default_for(kind), Command::default_for(kind))
@@ -122,7 +123,7 @@ pub fn protocol_costs(timer: &SysTickInstructions) {
 pub fn step_breakdown(timer: &SysTickInstructions) {
     use dexter_core::control::{Controller, ControllerParams};
     use dexter_core::estimate::BallEstimator;
-    use dexter_core::fixed_rate::Mode;
+    use dexter_core::fixed_rate::{FixedRate, Mode};
     use dexter_core::mirror::MirrorLaw;
     use dexter_core::protocol::SensorFrame;
     use dexter_core::state::PaddleState;
