@@ -267,6 +267,47 @@ mod tests {
         assert!((m.end_angle_rad() - 1.0).abs() < 1e-12);
     }
 
+    /// Speed-limited moves from a moving start, both ways, against their distances by hand:
+    /// the ramp from `w_0` to `w_1` covers `(w_1^2 - w_0^2) / (2 sigma a)`, the ramp down
+    /// `w_1^2 / (2 sigma a)`, and the coast the rest at `w_1`.
+    /// - forward: (0.5 rad, 1 rad/s) to 5 rad, a = 2, v_max = 3: sigma = +1, the peak
+    ///   sqrt(2 * 4.5 + 0.5) = 3.08 is cut to 3; ramps 2 + 2.25 = 4.25 rad in 1 s and 1.5 s,
+    ///   a coast of 0.25 rad in 1/12 s; the joint never turns, so its extremes are the
+    ///   start and the target;
+    /// - backward: (0, -0.5 rad/s) to -3 rad, a = 2, v_max = 1.5: sigma = -1, peak
+    ///   sqrt(6.125) = 2.47 cut to 1.5; ramps -0.5 rad in 0.5 s and -0.5625 rad in 0.75 s, a
+    ///   coast of -1.9375 rad in 1.9375 / 1.5 s.
+    #[test]
+    fn a_limited_move_from_a_moving_start_coasts_the_rest_of_the_way() {
+        let m = BangBang::to_rest_at(0.5_f64, 1.0, 5.0, 2.0, 3.0);
+        let (up, coast, down) = (1.0, 1.0 / 12.0, 1.5);
+        assert!(
+            (m.duration_s() - (up + coast + down)).abs() < 1e-12,
+            "{}",
+            m.duration_s()
+        );
+        let switches: Vec<f64> = m.switches_s().collect();
+        for (got, want) in switches.iter().zip([up, up + coast, up + coast + down]) {
+            assert!((got - want).abs() < 1e-12, "{switches:?}");
+        }
+        assert!((m.sample(up + 0.5 * coast).velocity_radps - 3.0).abs() < 1e-12);
+        assert!((m.end_angle_rad() - 5.0).abs() < 1e-12);
+        let (stop, end) = m.extremes_rad();
+        assert_eq!(stop, 0.5, "no turn: the start is the near extreme");
+        assert!((end - 5.0).abs() < 1e-12);
+
+        let m = BangBang::to_rest_at(0.0_f64, -0.5, -3.0, 2.0, 1.5);
+        let (up, coast, down) = (0.5, 1.9375 / 1.5, 0.75);
+        assert!(
+            (m.duration_s() - (up + coast + down)).abs() < 1e-12,
+            "{}",
+            m.duration_s()
+        );
+        assert!((m.sample(up + 0.5 * coast).velocity_radps + 1.5).abs() < 1e-12);
+        assert!((m.end_angle_rad() + 3.0).abs() < 1e-12);
+        assert_eq!(m.first_accel_radps2(), -2.0);
+    }
+
     /// A throw's catch: moving forward at 3 rad/s, back to 0.2 rad behind the start under
     /// a = 30. The joint must first brake (sigma = -1), overshoot to the braking stop
     /// 0.15 rad ahead, come back. Time by hand: w_1 = -sqrt(30 * 0.2 + 4.5) = -sqrt(10.5),
