@@ -10,13 +10,16 @@
 /// Most points one plotted series keeps ([`Decimator`]); longer series are decimated.
 pub const PLOT_MAX_POINTS: usize = 50_000;
 
-/// The last `cap` values of a stream, in order: a ring buffer (a push is a store and an
-/// index step, no allocation once full).
+/// The last `cap` values of a stream, in order: a ring buffer of a power-of-two number of
+/// slots, so a push is a store at `seen & mask` and a count (no wrap test, no modulo; the
+/// passive bounce pays it once per impact). Value number `i` (from 0) lives in slot
+/// `i & mask`; the kept ones are the last `min(seen, cap)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tail<T> {
+    /// Slots, filled in order until there are `mask + 1` of them.
     buf: Vec<T>,
-    /// Where the oldest value is once the ring is full (the next to be overwritten).
-    head: usize,
+    /// Slots less one (a power of two less one, at least `cap - 1`).
+    mask: usize,
     cap: usize,
     seen: u64,
 }
@@ -24,9 +27,10 @@ pub struct Tail<T> {
 impl<T> Tail<T> {
     /// Keep the last `cap` values.
     pub fn new(cap: usize) -> Self {
+        let slots = cap.max(1).next_power_of_two();
         Self {
-            buf: Vec::with_capacity(cap.min(1 << 16)),
-            head: 0,
+            buf: Vec::with_capacity(slots.min(1 << 16)),
+            mask: slots - 1,
             cap,
             seen: 0,
         }
@@ -35,44 +39,36 @@ impl<T> Tail<T> {
     /// Add a value.
     #[inline]
     pub fn push(&mut self, v: T) {
-        self.seen += 1;
-        if self.buf.len() < self.cap {
+        let i = self.seen as usize & self.mask;
+        if i < self.buf.len() {
+            self.buf[i] = v;
+        } else {
             self.buf.push(v);
-        } else if self.cap > 0 {
-            self.buf[self.head] = v;
-            self.head += 1;
-            if self.head == self.cap {
-                self.head = 0;
-            }
         }
+        self.seen += 1;
     }
 
-    /// The kept values, oldest first (puts the ring in order first).
-    pub fn as_slice(&mut self) -> &[T] {
-        self.buf.rotate_left(self.head);
-        self.head = 0;
-        &self.buf
+    /// The slot of the `k`-th kept value (0 = oldest).
+    fn slot(&self, k: usize) -> usize {
+        (self.seen as usize - self.len() + k) & self.mask
+    }
+
+    /// The kept values, oldest first, as a vector.
+    pub fn to_vec(&self) -> Vec<T>
+    where
+        T: Clone,
+    {
+        self.iter().cloned().collect()
     }
 
     /// Iterate over the kept values, oldest first.
     pub fn iter(&self) -> impl DoubleEndedIterator<Item = &T> + ExactSizeIterator {
-        let (newer, older) = self.buf.split_at(self.head);
-        // an ExactSizeIterator over both halves, oldest first
-        (0..self.buf.len()).map(move |i| {
-            if i < older.len() {
-                &older[i]
-            } else {
-                &newer[i - older.len()]
-            }
-        })
+        (0..self.len()).map(move |k| &self.buf[self.slot(k)])
     }
 
     /// The newest value.
     pub fn last(&self) -> Option<&T> {
-        match self.head {
-            0 => self.buf.last(),
-            h => self.buf.get(h - 1),
-        }
+        self.len().checked_sub(1).map(|k| &self.buf[self.slot(k)])
     }
 
     /// How many values were pushed in all.
@@ -82,12 +78,12 @@ impl<T> Tail<T> {
 
     /// How many are kept.
     pub fn len(&self) -> usize {
-        self.buf.len()
+        self.seen.min(self.cap as u64) as usize
     }
 
     /// True if none is kept.
     pub fn is_empty(&self) -> bool {
-        self.buf.is_empty()
+        self.len() == 0
     }
 }
 
@@ -170,10 +166,10 @@ mod tests {
         assert_eq!(t.iter().copied().collect::<Vec<_>>(), [7, 8, 9]);
         assert_eq!(t.iter().rev().copied().collect::<Vec<_>>(), [9, 8, 7]);
         assert_eq!((t.seen(), t.len(), t.last()), (10, 3, Some(&9)));
-        assert_eq!(t.as_slice(), &[7, 8, 9]);
+        assert_eq!(t.to_vec(), [7, 8, 9]);
         t.push(10);
         assert_eq!(t.last(), Some(&10));
-        assert_eq!(t.as_slice(), &[8, 9, 10]);
+        assert_eq!(t.to_vec(), [8, 9, 10]);
         for n in 0..12 {
             let mut r = Tail::new(4);
             for i in 0..n {
@@ -182,11 +178,22 @@ mod tests {
             let want: Vec<i32> = (0.max(n - 4)..n).collect();
             assert_eq!(r.iter().copied().collect::<Vec<_>>(), want, "{n}");
             assert_eq!(r.last().copied(), want.last().copied(), "{n}");
-            assert_eq!(r.as_slice(), want.as_slice(), "{n}");
+            assert_eq!(r.to_vec(), want, "{n}");
         }
         let mut short = Tail::new(5);
         short.push(1.0);
-        assert_eq!(short.as_slice(), &[1.0]);
+        assert_eq!(short.to_vec(), [1.0]);
+        let mut none = Tail::new(0);
+        none.push(1);
+        assert_eq!((none.len(), none.last(), none.to_vec()), (0, None, vec![]));
+        for cap in [1, 3, 5, 8, 9] {
+            let mut t = Tail::new(cap);
+            for i in 0..40 {
+                t.push(i);
+                let want: Vec<i32> = (0.max(i + 1 - cap as i32)..=i).collect();
+                assert_eq!(t.to_vec(), want, "cap {cap} after {i}");
+            }
+        }
     }
 
     #[test]

@@ -1,5 +1,8 @@
 //! The line juggler's plant: a ball on a vertical line over a surface, advanced from event
-//! to event with only the effects it was assembled with.
+//! to event with only the effects it was assembled with ([`table`]: the passive bounce on a
+//! fixed table in closed form).
+
+pub mod table;
 
 use super::impact::ImpactRow;
 use super::surface::Surface;
@@ -123,9 +126,22 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
         max_impacts: u64,
         on_impact: &mut impl FnMut(&ImpactRow),
     ) -> Advance {
+        self.advance_segments(t_end_s, max_impacts, MAX_SEGMENTS_PER_CALL, on_impact)
+    }
+
+    /// As [`advance_to`](Self::advance_to), with at most `max_segments` flight segments
+    /// ([`Advance::SegmentCap`] after them).
+    #[inline(always)]
+    pub fn advance_segments(
+        &mut self,
+        t_end_s: f64,
+        max_impacts: u64,
+        max_segments: u32,
+        on_impact: &mut impl FnMut(&ImpactRow),
+    ) -> Advance {
         let g = self.gravity_mps2;
         let mut segment_impacts = 0u32;
-        for _ in 0..MAX_SEGMENTS_PER_CALL {
+        for _ in 0..max_segments {
             let window = t_end_s - self.time_s;
             if window <= 0.0 {
                 return Advance::Reached;

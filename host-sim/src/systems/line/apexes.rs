@@ -67,8 +67,8 @@ impl ApexStats {
 
     /// As [`detect_period`] on every apex of the run.
     pub fn period(&self) -> Option<u32> {
-        let mut tail = self.tail.clone();
-        detect_period(tail.as_slice(), self.max_period, self.period_tolerance)
+        let tail = self.tail.to_vec();
+        detect_period(&tail, self.max_period, self.period_tolerance)
     }
 }
 

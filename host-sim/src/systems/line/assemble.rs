@@ -3,7 +3,7 @@
 //! [`super::loops`] are monomorphized for the enabled effects and an absent effect costs
 //! nothing (a zero-sized "off" type, not a per-step `if`).
 
-use super::loops::{free_run, stepped_run};
+use super::loops::{free_run, segments, stepped_run};
 use super::outcome::{Recorder, RunError, RunOptions};
 use super::scene::{ActuatorKind, ControlMode, Integrator, Scene};
 use crate::controller::{Sil, StepController};
@@ -29,6 +29,7 @@ pub(super) fn run(
     rec: &mut Recorder,
 ) -> Result<(), RunError> {
     match &s.drag {
+        None if s.jitter.is_none() && s.control.mode == ControlMode::None => table(s, o, rec),
         None => with_jitter(s, o, c, rec, Ballistic),
         Some(d) => match d.integrator {
             Integrator::Rk4 => {
@@ -41,6 +42,17 @@ pub(super) fn run(
             }
         },
     }
+}
+
+/// The passive bounce (no drag, no jitter, a fixed table): its bounces in closed form.
+fn table(s: &Scene, o: &RunOptions, rec: &mut Recorder) -> Result<(), RunError> {
+    let table = Table {
+        height_m: s.table.height_m,
+    };
+    let plant = plant(s, Ballistic, table, NoJitter);
+    free_run(s, o, plant, rec, |p, t_end_s, max_impacts, rec| {
+        p.bounce_to(t_end_s, max_impacts, &mut |r| rec.push(r))
+    })
 }
 
 fn with_jitter<F: Flight>(
@@ -89,7 +101,7 @@ fn with_surface<F: Flight, J: Jitter>(
             let table = Table {
                 height_m: s.table.height_m,
             };
-            free_run(s, o, plant(s, flight, table, jitter), rec)?;
+            free_run(s, o, plant(s, flight, table, jitter), rec, segments)?;
         }
         ControlMode::IdealMirror => {
             let target = s
@@ -99,7 +111,8 @@ fn with_surface<F: Flight, J: Jitter>(
             let g = s.physics.gravity_mps2;
             let law = MirrorLaw::new(s.kappa0(), s.control.kappa1_s2pm2, target, g)
                 .map_err(|e| super::validate::param_error(&e))?;
-            free_run(s, o, plant(s, flight, IdealMirror { law }, jitter), rec)?;
+            let mirror = plant(s, flight, IdealMirror { law }, jitter);
+            free_run(s, o, mirror, rec, segments)?;
         }
         ControlMode::Sil => {
             let a = &s.actuator;

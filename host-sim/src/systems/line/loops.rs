@@ -50,22 +50,40 @@ fn finish<F: Flight, S: Surface, J: Jitter>(
     out.last_row = (plant.impacts > 0).then_some(plant.last_row);
 }
 
+/// The general segment loop ([`LinePlant::advance_to`]).
+#[inline(always)]
+pub(super) fn segments<F: Flight, S: Surface, J: Jitter>(
+    plant: &mut LinePlant<F, S, J>,
+    t_end_s: f64,
+    max_impacts: u64,
+    rec: &mut Recorder,
+) -> Advance {
+    plant.advance_to(t_end_s, max_impacts, &mut |r| rec.push(r))
+}
+
 /// Impact-to-impact run without a controller (table, ideal mirror): to the impact limit,
-/// the time limit, or resting contact on a table. Every call of the plant either adds
-/// impacts or advances time; one that does neither is an error, never a silent end.
-pub(super) fn free_run<F: Flight, S: Surface, J: Jitter>(
+/// the time limit, or resting contact on a table, each stretch advanced by `advance`. Every
+/// call of the plant either adds impacts or advances time; one that does neither is an
+/// error, never a silent end. `advance` takes the plant to a time or an impact count,
+/// recording impacts: [`segments`] (the general loop) or a closed form for the plant's
+/// case ([`LinePlant::bounce_to`], the passive bounce); monomorphized, so inlined.
+pub(super) fn free_run<F: Flight, S: Surface, J: Jitter, A>(
     s: &Scene,
     o: &RunOptions,
     mut plant: LinePlant<F, S, J>,
     rec: &mut Recorder,
-) -> Result<(), RunError> {
+    advance: A,
+) -> Result<(), RunError>
+where
+    A: Fn(&mut LinePlant<F, S, J>, f64, u64, &mut Recorder) -> Advance,
+{
     let start = Instant::now();
     let total = s.stop.impacts;
     let mut pb = bar(o, s);
     let end = loop {
         let goal = (plant.impacts + CHUNK_IMPACTS).min(total);
         let before = (plant.impacts, plant.time_s);
-        let advance = plant.advance_to(s.stop.duration_s, goal, &mut |r| rec.push(r));
+        let advance = advance(&mut plant, s.stop.duration_s, goal, rec);
         if J::ON && plant.jitter.unphysical().is_some() {
             return Err(unphysical(&plant));
         }
