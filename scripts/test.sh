@@ -49,6 +49,21 @@ fi
 qemu-system-arm -machine help | grep -q mps2-an386 || die "this qemu-system-arm lacks the mps2-an386 machine: install QEMU >= 7.2"
 qemu-system-arm -machine help | grep -q netduinoplus2 || die "this qemu-system-arm lacks the netduinoplus2 machine (the emulated NUCLEO-F446RE board): install QEMU >= 7.2"
 
+# valgrind (scripts/loop-cost.sh counts the CLI's instructions per impact and per step)
+if ! command -v valgrind >/dev/null; then
+  if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
+    step "installing valgrind from Debian (apt-get install valgrind)"
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq valgrind >/dev/null) \
+      || die "could not install valgrind: run 'sudo apt-get install valgrind'"
+  elif command -v apt-get >/dev/null && command -v sudo >/dev/null; then
+    step "installing valgrind from Debian (sudo apt-get install valgrind)"
+    (sudo apt-get update -qq && sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq valgrind >/dev/null) \
+      || die "could not install valgrind: run 'sudo apt-get install valgrind'"
+  else
+    die "valgrind is required for the instruction ceilings of scripts/loop-cost.sh: install it (Debian/Ubuntu: 'sudo apt-get install valgrind'; macOS: not available, run on Linux)"
+  fi
+fi
+
 # SLURM (host-sim/tests/slurm.rs starts a one-node cluster in a temporary directory)
 have() { command -v "$1" >/dev/null || [ -x "/usr/sbin/$1" ]; }
 if ! { have munged && have mungekey && have slurmctld && have slurmd && have sbatch; }; then
@@ -100,6 +115,9 @@ python3 scripts/wcet.py "$ARM_FW" '<dexter_core::control::Controller as dexter_c
 # 416 = ArmController's 424-instruction budget less the 8 its HIL measurement window adds
 # (shared/src/arm_control.rs, STEP_INSTRUCTION_BUDGET)
 python3 scripts/wcet.py "$ARM_FW" '<dexter_core::arm_control::ArmController as dexter_core::fixed_rate::FixedRate>::step' --max-instructions 416
+
+step "instructions per impact and per control step through the release CLI, under their ceilings (scripts/loop-cost.sh --check)"
+scripts/loop-cost.sh --check
 
 step "the NUCLEO-F446RE image builds for $TARGET (release); its sizes are checked by tests/board.rs"
 cargo build -p dexter-nucleo-f446re --release --target "$TARGET"

@@ -1,7 +1,8 @@
 //! The host end of the byte link to the firmware: the semihosting files
 //! ([`super::semihosting`]), the TCP socket QEMU attaches the UART to, or a real board's
 //! serial port. Reads wait with
-//! `poll(2)` on the calling thread, in slices, so an emulator that died is noticed at once;
+//! `poll(2)` on the calling thread ([`WaitPolicy`]: at once, or after a spin), in slices,
+//! so an emulator that died is noticed at once;
 //! one `write` per frame, one `poll` and one `read` per answer, no thread hand-off and no
 //! allocation per frame.
 //!
@@ -19,8 +20,56 @@ use std::net::{TcpListener, TcpStream};
 use std::os::fd::{AsRawFd, RawFd};
 use std::time::{Duration, Instant};
 
-/// How long a wait for the firmware's answer looks without sleeping (see `Link::receive`).
+/// How long a wait for the firmware's answer looks without sleeping, under
+/// [`WaitPolicy::Spin`] and [`WaitPolicy::Adaptive`] (see `Link::receive`).
 const SPIN: Duration = Duration::from_micros(200);
+
+/// Under [`WaitPolicy::Adaptive`], the waits that block at once after a spin found nothing.
+const BLOCKING_AFTER_MISS: u32 = 64;
+
+/// The environment variable that picks the host's [`WaitPolicy`] (`block`, `spin`,
+/// `adaptive`), for measuring them against each other (`scripts/hil-load.sh`).
+pub const WAIT_POLICY_VAR: &str = "DEXTER_HIL_WAIT";
+
+/// How the host waits for the firmware's answer. A spinning wait answers within
+/// microseconds when a core is free for it, and takes the core from QEMU when none is: on
+/// a busy host the emulator then runs only when the spin's time slice ends, and the loop
+/// falls 4 to 15 times (BENCHMARKS.md, "HIL on a busy host"). A blocking `poll` costs a
+/// wake-up per answer wherever the processes run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum WaitPolicy {
+    /// Sleep in `poll(2)` at once (the default: its rate does not collapse under load).
+    #[default]
+    Block,
+    /// Look without sleeping for [`SPIN`] first.
+    Spin,
+    /// Spin while spinning finds the answer; after a spin that found nothing, block for
+    /// the next [`BLOCKING_AFTER_MISS`] waits, then try again.
+    Adaptive,
+}
+
+impl WaitPolicy {
+    /// The policy named by [`WAIT_POLICY_VAR`], or the default if it is unset.
+    pub fn from_env() -> Result<Self, ControllerError> {
+        match std::env::var(WAIT_POLICY_VAR) {
+            Err(std::env::VarError::NotPresent) => Ok(Self::default()),
+            Ok(v) => Self::parse(&v),
+            Err(e) => Err(link_err(format!("{WAIT_POLICY_VAR}: {e}"))),
+        }
+    }
+
+    /// The policy named `name`; an error naming [`WAIT_POLICY_VAR`] and the choices.
+    pub fn parse(name: &str) -> Result<Self, ControllerError> {
+        match name {
+            "block" => Ok(Self::Block),
+            "spin" => Ok(Self::Spin),
+            "adaptive" => Ok(Self::Adaptive),
+            _ => Err(link_err(format!(
+                "{WAIT_POLICY_VAR} = {name:?}: expected block, spin or adaptive"
+            ))),
+        }
+    }
+}
 
 /// Bytes read from the link at a time.
 const READ_CHUNK: usize = 4096;
@@ -75,6 +124,9 @@ enum Io {
 pub(super) struct Link {
     io: Io,
     buf: Box<[u8; READ_CHUNK]>,
+    wait: WaitPolicy,
+    /// Waits left that block at once ([`WaitPolicy::Adaptive`]).
+    blocking_waits: u32,
 }
 
 /// What a wait for bytes found.
@@ -103,6 +155,8 @@ impl Link {
         Ok(Link {
             io,
             buf: Box::new([0; READ_CHUNK]),
+            wait: WaitPolicy::from_env()?,
+            blocking_waits: 0,
         })
     }
 
@@ -116,6 +170,8 @@ impl Link {
         Ok(Link {
             io: Io::Serial(port),
             buf: Box::new([0; READ_CHUNK]),
+            wait: WaitPolicy::from_env()?,
+            blocking_waits: 0,
         })
     }
 
@@ -145,6 +201,19 @@ impl Link {
         }
     }
 
+    /// How long the next wait looks without sleeping ([`WaitPolicy`]).
+    fn spin(&mut self) -> Duration {
+        match self.wait {
+            WaitPolicy::Block => Duration::ZERO,
+            WaitPolicy::Spin => SPIN,
+            WaitPolicy::Adaptive if self.blocking_waits > 0 => {
+                self.blocking_waits -= 1;
+                Duration::ZERO
+            }
+            WaitPolicy::Adaptive => SPIN,
+        }
+    }
+
     /// Wait up to `wait` for bytes and return what one read got.
     pub(super) fn receive(&mut self, wait: Duration) -> std::io::Result<Received<'_>> {
         let mut fds = libc::pollfd {
@@ -154,13 +223,15 @@ impl Link {
         };
         // Round up, so a wait shorter than 1 ms still waits instead of spinning.
         let ms = wait.as_micros().div_ceil(1000).min(i32::MAX as u128) as libc::c_int;
-        // Look without sleeping for a little while first: the answer usually comes within
-        // tens of microseconds, and a sleeping wait adds a wake-up to every round trip.
-        let spin_until = Instant::now() + SPIN;
+        let spin = self.spin();
+        let spin_until = Instant::now() + spin;
         let mut ready = 0;
         while ready == 0 && Instant::now() < spin_until {
             // Safety: `fds` is one valid pollfd for the duration of the call.
             ready = unsafe { libc::poll(&mut fds, 1, 0) };
+        }
+        if ready == 0 && !spin.is_zero() && self.wait == WaitPolicy::Adaptive {
+            self.blocking_waits = BLOCKING_AFTER_MISS;
         }
         if ready == 0 {
             // Safety: as above.
@@ -290,5 +361,50 @@ impl Peer {
             Peer::Qemu(_) => format!("{link:?} link, QEMU still running"),
             Peer::Board(opts) => format!("board on {}", opts.path.display()),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_wait_policy_is_named_or_refused_by_name() {
+        assert_eq!(WaitPolicy::parse("block").unwrap(), WaitPolicy::Block);
+        assert_eq!(WaitPolicy::parse("spin").unwrap(), WaitPolicy::Spin);
+        assert_eq!(WaitPolicy::parse("adaptive").unwrap(), WaitPolicy::Adaptive);
+        assert_eq!(WaitPolicy::default(), WaitPolicy::Block);
+        let e = WaitPolicy::parse("Spin").unwrap_err().to_string();
+        assert!(
+            e.contains("DEXTER_HIL_WAIT") && e.contains("\"Spin\""),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_adaptive_wait_blocks_after_a_miss_and_then_tries_again() {
+        let files = || {
+            let dir = WorkDir::create().unwrap();
+            SemihostingFiles::create(&dir).map(|f| (dir, f))
+        };
+        let (_dir, f) = files().unwrap();
+        let mut link = Link {
+            io: Io::Semihosting(f),
+            buf: Box::new([0; READ_CHUNK]),
+            wait: WaitPolicy::Adaptive,
+            blocking_waits: 0,
+        };
+        assert_eq!(link.spin(), SPIN);
+        // nothing comes: the spin missed, so the next waits block at once
+        assert!(matches!(
+            link.receive(Duration::ZERO).unwrap(),
+            Received::Nothing
+        ));
+        for _ in 0..BLOCKING_AFTER_MISS {
+            assert_eq!(link.spin(), Duration::ZERO);
+        }
+        assert_eq!(link.spin(), SPIN);
+        link.wait = WaitPolicy::Block;
+        assert_eq!(link.spin(), Duration::ZERO);
     }
 }
