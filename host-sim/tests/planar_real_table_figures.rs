@@ -47,13 +47,23 @@ fn run<T: SinCos>(mut table: RealTable, iterations: u8) -> TableRun {
 
 fn rows<T: SinCos>() {
     for n in 1..=4u8 {
-        // the solver alone: perfect camera and drives, the paper's law
+        // the solver alone: perfect camera and drives, the paper's law (no tilt-rate term and
+        // no horizontal regulation: with the regulation's gains and no rate term the body tips
+        // over within ten impacts)
         let mut perfect = RealTable::realistic(1);
         perfect.camera = None;
         perfect.tilt = None;
         perfect.stroke = None;
         perfect.controller.kappa_rate_s = 0.0;
+        perfect.controller.kappa_x_pm = 0.0;
+        perfect.controller.kappa_xdot_spm = 0.0;
         let s = run::<T>(perfect, n).summary;
+        assert!(
+            s.stayed_up,
+            "the solver-alone run (cap {n}) ended {:?} after {} impacts: its error would not be the solver's",
+            s.end,
+            s.impacts
+        );
         let solver_rms = s.impact_time_error_rms_s.unwrap_or(f64::NAN);
         // the realistic table over 20 camera seeds
         let (mut up, mut energy, mut sq, mut count, mut worst) = (0, 0.0, 0.0, 0usize, 0.0f64);
