@@ -28,6 +28,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
+pub mod tradeoff;
+
 /// Width and height, in pixels, of every plot (the PNG's size and the SVG's view box).
 pub const PLOT_SIZE: (u32, u32) = (1024, 768);
 
@@ -479,7 +481,7 @@ pub(crate) fn span(
 /// Registers the embedded DejaVu Sans for the font families plotters asks for (once per
 /// process). Both backends need it: the bitmap backend to draw glyphs, the SVG backend to
 /// measure text for the layout.
-fn ensure_fonts() -> Result<(), String> {
+pub(crate) fn ensure_fonts() -> Result<(), String> {
     static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
     REGISTERED
         .get_or_init(|| {
