@@ -46,7 +46,7 @@ mod tests {
     #[test]
     fn an_elastic_ball_keeps_its_apex_and_period() {
         // from 1 m at g = 9.81: each flight takes 2 sqrt(2/g), each apex is 1 m
-        let g = 9.81;
+        let g: f64 = 9.81;
         let (t, apex) = bounces(1000, (2.0 * g).sqrt(), 1.0, g);
         assert!((t - 2000.0 * (2.0f64 / g).sqrt()).abs() < 1e-9, "{t}");
         assert!((apex - 1.0).abs() < 1e-12, "{apex}");
