@@ -119,6 +119,9 @@ python3 scripts/wcet.py "$ARM_FW" '<dexter_core::arm_control::ArmController as d
 step "instructions per impact and per control step through the release CLI, under their ceilings (scripts/loop-cost.sh --check)"
 scripts/loop-cost.sh --check
 
+step "guest instructions per HIL control period in QEMU, under their ceiling (scripts/hil-guest-count.sh --check)"
+scripts/hil-guest-count.sh --check
+
 step "the NUCLEO-F446RE image builds for $TARGET (release); its sizes are checked by tests/board.rs"
 cargo build -p dexter-nucleo-f446re --release --target "$TARGET"
 
