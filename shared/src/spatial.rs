@@ -1,0 +1,500 @@
+//! The spatial juggler's mirror law (Rizzi & Koditschek, "Further progress in robot juggling:
+//! solvable mirror laws", 1994, sec. 3.1.2, eq. 13, with k(w) of eq. 5).
+//!
+//! A ball flies in 3-D, position b = (b_x, b_y, b_z) (m, b_z up) under gravity
+//! a_p = (0, 0, -gamma) (eq. 3 with b in R^3). A three-joint robot at the origin bats it with a
+//! paddle on a bar. The paper gives the law but not the machine's joint conventions; these
+//! are the ones used here (docs/spatial.md derives the kinematics):
+//!
+//! | joint | angle | zero | positive |
+//! | --- | --- | --- | --- |
+//! | q1, azimuth | rad | the bar over the b_x axis | counterclockwise about +z |
+//! | q2, shoulder | rad | the bar straight up; -pi/2 is the bar horizontal, over its azimuth | raises the bar |
+//! | q3, paddle roll about the bar | rad | the paddle's normal in the bar's vertical plane | tilts the normal toward the lateral direction t = (-sin q1, cos q1, 0) |
+//!
+//! so the bar points along u = (cos e cos q1, cos e sin q1, sin e), with elevation
+//! e = q2 + pi/2 above the horizontal. The inverse kinematic image of the ball (the joint
+//! angles that put the bar's axis through it, and the distance along the bar) is
+//!
+//! ```text
+//! g^-1(b) = (atan2(b_y, b_x), atan2(b_z, rho) - pi/2, |b|),   rho = sqrt(b_x^2 + b_y^2)
+//! ```
+//!
+//! # The law (eq. 13)
+//!
+//! ```text
+//! r1 = [g^-1]_1(b) = phi_b                                   (the azimuth follows the ball)
+//! r2 = -pi/2 - k(w) ([g^-1]_2(b) + pi/2) - l1(b, b') = -pi/2 - k(w) e_b - l1
+//! r3 = l2(b, b')
+//! k(w) = kappa0 + kappa1 (eta* - eta),   eta = |b'|^2/2 + gamma b_z                  (eq. 5)
+//! l1 = kappa10 (rho - rho*) + kappa11 rho'                          (radial PD, rad)
+//! l2 = kappa20 d + kappa21 d',   d = rho sin(phi_b - phi*)          (lateral PD, rad)
+//! ```
+//!
+//! e_b = atan2(b_z, rho) is the ball's elevation, (rho*, phi*) the set point's horizontal
+//! radius and azimuth, and d the ball's signed distance from the vertical plane through the
+//! z axis and the set point (positive counterclockwise of it).
+//!
+//! Reading of the printed eq. 13: its second row `-pi/2 - k([g^-1]_2(b) + pi/2) + -l_1` mirrors
+//! the ball's angle from the horizontal (`[g^-1]_2 + pi/2` = e_b) about the horizontal
+//! (q2 = -pi/2) with `-k`, the sign eq. 5 lost in extraction (restored in [`crate::mirror`] and
+//! [`crate::planar`]); the `+ -` is read as a minus. In elevation, the bar's reference is
+//! `e_r = r2 + pi/2 = -k e_b - l1`: the planar law of eq. 12, `theta_r = -k theta_b + l`, with
+//! `l = -l1`. So in the vertical plane through the base (b_y = b_y' = 0, phi* = 0) this law is
+//! [`crate::planar::PlanarMirrorLaw`] with kappa10, kappa11 negated, and r1 = r3 = 0; the
+//! tests check that. The paper does not define l1 and l2 beyond "linear affine
+//! transformations implementing proportional-derivative spatial regulation terms in the
+//! radial and lateral directions"; the radial and lateral distances above are this crate's
+//! reading.
+//!
+//! The rates along the ballistic flow, for a tracking controller's feed-forward, use that
+//! eta (so k), the horizontal velocity and h = b_x b_y' - b_y b_x' (the angular momentum
+//! about z per unit mass) are constant in flight. Every angle and rate is undefined over the
+//! base (rho = 0): non-finite there.
+
+use crate::math::Real;
+use crate::params::{finite, non_negative, positive, ParamError};
+
+/// A ball in 3-D: position (m) and velocity (m/s), b_z up.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SpatialBall<R> {
+    /// Position b = (b_x, b_y, b_z), m.
+    pub position_m: [R; 3],
+    /// Velocity b' = (b_x', b_y', b_z'), m/s.
+    pub velocity_mps: [R; 3],
+}
+
+impl<R: Real> SpatialBall<R> {
+    /// A ball at `position_m` (m) with `velocity_mps` (m/s).
+    pub const fn new(position_m: [R; 3], velocity_mps: [R; 3]) -> Self {
+        Self {
+            position_m,
+            velocity_mps,
+        }
+    }
+
+    /// Scaled total energy eta = |b'|^2/2 + gamma b_z, J/kg (eq. 5).
+    #[inline]
+    pub fn energy_jpkg(&self, gravity_mps2: R) -> R {
+        let [u, v, w] = self.velocity_mps;
+        R::HALF * (u * u + v * v + w * w) + gravity_mps2 * self.position_m[2]
+    }
+
+    /// Ballistic flight for `dt_s` seconds (eq. 3), exact; `dt_s` may be negative.
+    #[inline]
+    pub fn flown(&self, dt_s: R, gravity_mps2: R) -> Self {
+        let [x, y, z] = self.position_m;
+        let [u, v, w] = self.velocity_mps;
+        Self {
+            position_m: [
+                x + u * dt_s,
+                y + v * dt_s,
+                z + w * dt_s - R::HALF * gravity_mps2 * dt_s * dt_s,
+            ],
+            velocity_mps: [u, v, w - gravity_mps2 * dt_s],
+        }
+    }
+
+    /// The horizontal radius rho = sqrt(b_x^2 + b_y^2), m.
+    #[inline]
+    pub fn horizontal_radius_m(&self) -> R {
+        let [x, y, _] = self.position_m;
+        (x * x + y * y).sqrt()
+    }
+
+    /// The distance from the base |b| = `[g^-1(b)]_3`, m.
+    #[inline]
+    pub fn radius_m(&self) -> R {
+        let [x, y, z] = self.position_m;
+        (x * x + y * y + z * z).sqrt()
+    }
+
+    /// The ball's azimuth phi_b = `[g^-1(b)]_1` = atan2(b_y, b_x), rad.
+    #[inline]
+    pub fn azimuth_rad(&self) -> R {
+        self.position_m[1].atan2(self.position_m[0])
+    }
+
+    /// The ball's elevation above the horizontal e_b = atan2(b_z, rho) =
+    /// `[g^-1(b)]_2 + pi/2`, rad.
+    #[inline]
+    pub fn elevation_rad(&self) -> R {
+        self.position_m[2].atan2(self.horizontal_radius_m())
+    }
+
+    /// rho' = (b_x b_x' + b_y b_y') / rho, m/s.
+    #[inline]
+    pub fn radial_rate_mps(&self) -> R {
+        let ([x, y, _], [u, v, _]) = (self.position_m, self.velocity_mps);
+        (x * u + y * v) / self.horizontal_radius_m()
+    }
+
+    /// The horizontal velocity across the radius, rho phi_b' = (b_x b_y' - b_y b_x') / rho,
+    /// m/s (positive counterclockwise).
+    #[inline]
+    pub fn lateral_velocity_mps(&self) -> R {
+        let ([x, y, _], [u, v, _]) = (self.position_m, self.velocity_mps);
+        (x * v - y * u) / self.horizontal_radius_m()
+    }
+
+    /// phi_b' = (b_x b_y' - b_y b_x') / rho^2, rad/s.
+    #[inline]
+    pub fn azimuth_rate_radps(&self) -> R {
+        self.lateral_velocity_mps() / self.horizontal_radius_m()
+    }
+
+    /// e_b' = (rho b_z' - b_z rho') / |b|^2, rad/s.
+    #[inline]
+    pub fn elevation_rate_radps(&self) -> R {
+        let rho = self.horizontal_radius_m();
+        let r = self.radius_m();
+        (rho * self.velocity_mps[2] - self.position_m[2] * self.radial_rate_mps()) / (r * r)
+    }
+}
+
+/// Joint references q1, q2, q3 (rad) and their rates along the ballistic flow (rad/s).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointReference<R> {
+    /// Joint angles (azimuth, shoulder, paddle roll), rad (module docs).
+    pub angles_rad: [R; 3],
+    /// Joint rates, rad/s (feed-forward for a tracking controller).
+    pub rates_radps: [R; 3],
+}
+
+/// The parameters of [`SpatialMirrorLaw`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SpatialLawParams<R> {
+    /// Mirror gain at the target energy, dimensionless, >= 0.
+    pub kappa0: R,
+    /// Energy gain, s^2/m^2, >= 0.
+    pub kappa1_s2pm2: R,
+    /// Apex height b_z to regulate to, m, > 0 (eta* = gamma times it).
+    pub target_apex_m: R,
+    /// Radial proportional gain kappa10, rad/m, finite.
+    pub kappa10_radpm: R,
+    /// Radial derivative gain kappa11, rad s/m, finite.
+    pub kappa11_radspm: R,
+    /// Lateral proportional gain kappa20, rad/m, finite.
+    pub kappa20_radpm: R,
+    /// Lateral derivative gain kappa21, rad s/m, finite.
+    pub kappa21_radspm: R,
+    /// The set point's horizontal radius rho*, m, > 0.
+    pub target_radius_m: R,
+    /// The set point's azimuth phi*, rad, finite.
+    pub target_azimuth_rad: R,
+    /// Gravity gamma, m/s^2, > 0.
+    pub gravity_mps2: R,
+}
+
+/// The spatial mirror law, eq. 13 with the sign of eq. 5 restored (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpatialMirrorLaw<R> {
+    p: SpatialLawParams<R>,
+    target_energy_jpkg: R,
+    /// (cos phi*, sin phi*): d = rho sin(phi_b - phi*) is computed without an angle.
+    target_direction: [R; 2],
+}
+
+impl<R: Real> SpatialMirrorLaw<R> {
+    /// The law of `p`; an error names the first parameter out of its range.
+    pub fn new(p: SpatialLawParams<R>) -> Result<Self, ParamError> {
+        non_negative("kappa0", p.kappa0)?;
+        non_negative("kappa1", p.kappa1_s2pm2)?;
+        positive("target_apex_m", p.target_apex_m)?;
+        finite("kappa10", p.kappa10_radpm)?;
+        finite("kappa11", p.kappa11_radspm)?;
+        finite("kappa20", p.kappa20_radpm)?;
+        finite("kappa21", p.kappa21_radspm)?;
+        positive("target_radius_m", p.target_radius_m)?;
+        finite("target_azimuth_rad", p.target_azimuth_rad)?;
+        positive("gravity_mps2", p.gravity_mps2)?;
+        Ok(Self {
+            p,
+            target_energy_jpkg: p.gravity_mps2 * p.target_apex_m,
+            target_direction: [p.target_azimuth_rad.cos(), p.target_azimuth_rad.sin()],
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &SpatialLawParams<R> {
+        &self.p
+    }
+
+    /// The mirror gain k(w) = kappa0 + kappa1 (eta* - eta), dimensionless (eq. 5, 13).
+    #[inline]
+    pub fn gain(&self, ball: &SpatialBall<R>) -> R {
+        self.p.kappa0
+            + self.p.kappa1_s2pm2
+                * (self.target_energy_jpkg - ball.energy_jpkg(self.p.gravity_mps2))
+    }
+
+    /// The ball's signed distance from the set point's vertical plane,
+    /// d = rho sin(phi_b - phi*) = b_y cos phi* - b_x sin phi*, m.
+    #[inline]
+    pub fn lateral_offset_m(&self, ball: &SpatialBall<R>) -> R {
+        let [c, s] = self.target_direction;
+        ball.position_m[1] * c - ball.position_m[0] * s
+    }
+
+    /// d' = b_y' cos phi* - b_x' sin phi*, m/s (constant in flight).
+    #[inline]
+    pub fn lateral_offset_rate_mps(&self, ball: &SpatialBall<R>) -> R {
+        let [c, s] = self.target_direction;
+        ball.velocity_mps[1] * c - ball.velocity_mps[0] * s
+    }
+
+    /// The radial PD term l1 = kappa10 (rho - rho*) + kappa11 rho', rad (eq. 13).
+    #[inline]
+    pub fn radial_term_rad(&self, ball: &SpatialBall<R>) -> R {
+        self.p.kappa10_radpm * (ball.horizontal_radius_m() - self.p.target_radius_m)
+            + self.p.kappa11_radspm * ball.radial_rate_mps()
+    }
+
+    /// The lateral PD term l2 = kappa20 d + kappa21 d', rad (eq. 13).
+    #[inline]
+    pub fn lateral_term_rad(&self, ball: &SpatialBall<R>) -> R {
+        self.p.kappa20_radpm * self.lateral_offset_m(ball)
+            + self.p.kappa21_radspm * self.lateral_offset_rate_mps(ball)
+    }
+
+    /// The joint references of eq. 13 and their rates along the ballistic flow:
+    /// r1' = phi_b', r2' = -k e_b' - (kappa10 rho' + kappa11 rho''), r3' = kappa20 d', with
+    /// rho'' = (rho phi_b')^2 / rho (no horizontal force) and d'' = 0.
+    pub fn reference(&self, ball: &SpatialBall<R>) -> JointReference<R> {
+        let k = self.gain(ball);
+        let rho = ball.horizontal_radius_m();
+        let lateral = ball.lateral_velocity_mps();
+        let radial_accel = lateral * lateral / rho;
+        let half_pi = R::HALF * R::PI;
+        JointReference {
+            angles_rad: [
+                ball.azimuth_rad(),
+                -half_pi - k * ball.elevation_rad() - self.radial_term_rad(ball),
+                self.lateral_term_rad(ball),
+            ],
+            rates_radps: [
+                ball.azimuth_rate_radps(),
+                -k * ball.elevation_rate_radps()
+                    - self.p.kappa10_radpm * ball.radial_rate_mps()
+                    - self.p.kappa11_radspm * radial_accel,
+                self.p.kappa20_radpm * self.lateral_offset_rate_mps(ball),
+            ],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::planar::{PlanarBall, PlanarMirrorLaw};
+    use core::f64::consts::{FRAC_PI_2, PI};
+
+    const G: f64 = 9.81;
+
+    fn params() -> SpatialLawParams<f64> {
+        SpatialLawParams {
+            kappa0: 0.3,
+            kappa1_s2pm2: 0.02,
+            target_apex_m: 0.8,
+            kappa10_radpm: -0.4,
+            kappa11_radspm: -0.2,
+            kappa20_radpm: 0.5,
+            kappa21_radspm: 0.15,
+            target_radius_m: 0.9,
+            target_azimuth_rad: 0.0,
+            gravity_mps2: G,
+        }
+    }
+
+    fn close(a: f64, b: f64, tol: f64) -> bool {
+        (a - b).abs() <= tol * (1.0 + b.abs())
+    }
+
+    #[test]
+    fn ball_angles_and_rates_by_hand() {
+        // b = (3, 4, 12): rho = 5, |b| = 13; b' = (1, -2, 3)
+        let b = SpatialBall::new([3.0f64, 4.0, 12.0], [1.0, -2.0, 3.0]);
+        assert_eq!(b.horizontal_radius_m(), 5.0);
+        assert_eq!(b.radius_m(), 13.0);
+        assert!(close(b.azimuth_rad(), (4.0f64).atan2(3.0), 1e-15));
+        assert!(close(b.elevation_rad(), (12.0f64).atan2(5.0), 1e-15));
+        // rho' = (3 - 8)/5 = -1; rho phi' = (3 * -2 - 4 * 1)/5 = -2; phi' = -0.4
+        assert!(close(b.radial_rate_mps(), -1.0, 1e-15));
+        assert!(close(b.lateral_velocity_mps(), -2.0, 1e-15));
+        assert!(close(b.azimuth_rate_radps(), -0.4, 1e-15));
+        // e' = (5 * 3 - 12 * -1)/169 = 27/169
+        assert!(close(b.elevation_rate_radps(), 27.0 / 169.0, 1e-15));
+        // eta = (1 + 4 + 9)/2 + 9.81 * 12
+        assert!(close(b.energy_jpkg(G), 7.0 + G * 12.0, 1e-15));
+    }
+
+    #[test]
+    fn reference_by_hand() {
+        // kappa1 = 0: k = 0.3. Ball at (1, 0.2, 1), b' = (0.1, -0.3, -1), phi* = 0.
+        let law = SpatialMirrorLaw::new(SpatialLawParams {
+            kappa1_s2pm2: 0.0,
+            ..params()
+        })
+        .unwrap();
+        let b = SpatialBall::new([1.0, 0.2, 1.0], [0.1, -0.3, -1.0]);
+        let rho = 1.04f64.sqrt();
+        let rho_dot = (0.1 - 0.06) / rho;
+        let l1 = -0.4 * (rho - 0.9) - 0.2 * rho_dot;
+        let l2 = 0.5 * 0.2 + 0.15 * -0.3; // d = b_y, d' = b_y' at phi* = 0
+        let r = law.reference(&b);
+        assert!(close(r.angles_rad[0], 0.2f64.atan2(1.0), 1e-15));
+        let e_b = 1.0f64.atan2(rho);
+        assert!(close(r.angles_rad[1], -FRAC_PI_2 - 0.3 * e_b - l1, 1e-14));
+        assert!(close(r.angles_rad[2], l2, 1e-15));
+        assert!(close(r.rates_radps[2], 0.5 * -0.3, 1e-15));
+    }
+
+    /// In the vertical plane through the base, eq. 13 is eq. 12: the planar law (independent
+    /// code) with the radial gains negated, the azimuth and roll at zero.
+    #[test]
+    fn in_the_plane_through_the_base_it_is_the_planar_law() {
+        let p = params();
+        let planar = PlanarMirrorLaw::new(
+            p.kappa0,
+            p.kappa1_s2pm2,
+            p.target_apex_m,
+            -p.kappa10_radpm,
+            -p.kappa11_radspm,
+            p.target_radius_m,
+            G,
+        )
+        .unwrap();
+        let law = SpatialMirrorLaw::new(p).unwrap();
+        for i in 0..7 {
+            for j in 0..7 {
+                let (x, z) = (0.3 + 0.2 * i as f64, -0.5 + 0.3 * j as f64);
+                let (u, w) = (-0.4 + 0.13 * j as f64, 2.0 - 0.7 * i as f64);
+                let s = law.reference(&SpatialBall::new([x, 0.0, z], [u, 0.0, w]));
+                let q = planar.reference(&PlanarBall::new(x, z, u, w));
+                assert_eq!(s.angles_rad[0], 0.0);
+                assert_eq!(s.angles_rad[2], 0.0);
+                assert_eq!(s.rates_radps[2], 0.0);
+                assert!(close(s.angles_rad[1] + FRAC_PI_2, q.angle_rad, 1e-13));
+                assert!(close(s.rates_radps[1], q.rate_radps, 1e-13));
+            }
+        }
+    }
+
+    /// Turning the ball and the set point about z turns the azimuth reference with them and
+    /// leaves the shoulder and the roll as they were.
+    #[test]
+    fn turning_about_the_vertical_turns_only_the_azimuth() {
+        let b = SpatialBall::new([0.8, 0.3, 0.6], [0.2, -0.4, -1.5]);
+        let base = SpatialMirrorLaw::new(params()).unwrap().reference(&b);
+        for a in [0.4f64, 1.7, -2.5] {
+            let (c, s) = (a.cos(), a.sin());
+            let turn = |[x, y, z]: [f64; 3]| [c * x - s * y, s * x + c * y, z];
+            let law = SpatialMirrorLaw::new(SpatialLawParams {
+                target_azimuth_rad: a,
+                ..params()
+            })
+            .unwrap();
+            let r = law.reference(&SpatialBall::new(turn(b.position_m), turn(b.velocity_mps)));
+            let dq1 = (r.angles_rad[0] - base.angles_rad[0] - a).rem_euclid(2.0 * PI);
+            assert!(dq1 < 1e-12 || 2.0 * PI - dq1 < 1e-12, "{dq1}");
+            for i in 1..3 {
+                assert!(close(r.angles_rad[i], base.angles_rad[i], 1e-12));
+            }
+            for i in 0..3 {
+                assert!(close(r.rates_radps[i], base.rates_radps[i], 1e-12));
+            }
+        }
+    }
+
+    /// The rates are the time derivatives of the angles along the exact flight (central
+    /// differences, f64).
+    #[test]
+    fn rates_are_the_derivatives_along_the_flight() {
+        let law = SpatialMirrorLaw::new(SpatialLawParams {
+            target_azimuth_rad: 0.3,
+            ..params()
+        })
+        .unwrap();
+        let b = SpatialBall::new([0.7, -0.4, 0.9], [0.35, 0.5, 1.2]);
+        let h = 1e-5;
+        for t in [0.0, 0.1, 0.25] {
+            let at = |dt: f64| law.reference(&b.flown(t + dt, G)).angles_rad;
+            let (ahead, behind) = (at(h), at(-h));
+            let r = law.reference(&b.flown(t, G));
+            for i in 0..3 {
+                let fd = (ahead[i] - behind[i]) / (2.0 * h);
+                assert!(close(r.rates_radps[i], fd, 1e-7), "joint {i} at {t}: {fd}");
+            }
+        }
+    }
+
+    #[test]
+    fn parameters_out_of_range_are_named() {
+        let cases: [(SpatialLawParams<f64>, &str); 5] = [
+            (
+                SpatialLawParams {
+                    kappa0: -0.1,
+                    ..params()
+                },
+                "kappa0",
+            ),
+            (
+                SpatialLawParams {
+                    kappa21_radspm: f64::NAN,
+                    ..params()
+                },
+                "kappa21",
+            ),
+            (
+                SpatialLawParams {
+                    target_radius_m: 0.0,
+                    ..params()
+                },
+                "target_radius_m",
+            ),
+            (
+                SpatialLawParams {
+                    target_azimuth_rad: f64::INFINITY,
+                    ..params()
+                },
+                "target_azimuth_rad",
+            ),
+            (
+                SpatialLawParams {
+                    gravity_mps2: -9.81,
+                    ..params()
+                },
+                "gravity_mps2",
+            ),
+        ];
+        for (p, name) in cases {
+            let e = SpatialMirrorLaw::new(p).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("{name} ")), "{e}");
+        }
+    }
+
+    #[test]
+    fn runs_in_f32() {
+        let p = params();
+        let law32 = SpatialMirrorLaw::new(SpatialLawParams {
+            kappa0: p.kappa0 as f32,
+            kappa1_s2pm2: p.kappa1_s2pm2 as f32,
+            target_apex_m: p.target_apex_m as f32,
+            kappa10_radpm: p.kappa10_radpm as f32,
+            kappa11_radspm: p.kappa11_radspm as f32,
+            kappa20_radpm: p.kappa20_radpm as f32,
+            kappa21_radspm: p.kappa21_radspm as f32,
+            target_radius_m: p.target_radius_m as f32,
+            target_azimuth_rad: 0.0,
+            gravity_mps2: G as f32,
+        })
+        .unwrap();
+        let r32 = law32.reference(&SpatialBall::new([0.8f32, 0.3, 0.6], [0.2, -0.4, -1.5]));
+        let r64 = SpatialMirrorLaw::new(p)
+            .unwrap()
+            .reference(&SpatialBall::new([0.8, 0.3, 0.6], [0.2, -0.4, -1.5]));
+        for i in 0..3 {
+            assert!((f64::from(r32.angles_rad[i]) - r64.angles_rad[i]).abs() < 1e-5);
+        }
+    }
+}
