@@ -17,7 +17,7 @@
 //! | [`mirror`] | line-juggler mirror law with energy feedback | Rizzi & Koditschek 1994, eq. 5–9 |
 //! | [`tilt`] | kappa-tilt law, table-velocity energy feedback, stability limits | Zumel & Erdmann, eq. 3–4, 11, 16, 22–26 |
 //! | [`planar`] | planar juggler mirror law and the modified, solvable law | Rizzi & Koditschek 1994, eq. 11–16 |
-//! | [`spatial`] | the spatial juggler's mirror law: a three-joint robot's references from the ball's inverse kinematic image | Rizzi & Koditschek 1994, sec. 3.1.2, eq. 5, 13 |
+//! | [`spatial`] | the spatial juggler's mirror law (a three-joint robot's references from the ball's inverse kinematic image) and a modified law with a solvable flight time | Rizzi & Koditschek 1994, sec. 3.1.2, 4.1, eq. 5, 13, 15–16 |
 //! | [`hop`] | Raibert's fixed thrust and an energy-servo thrust | Koditschek & Bühler 1991, sec. 1.2, 3.1 |
 //! | [`bang_bang`] | the time-optimal bang-bang move of a joint to rest (the arm's release brake and its move to the catch) | Akella, Huang, Lynch & Mason, sec. 2.5 |
 //! | [`bspline`] | uniform cubic B-spline joint trajectories: O(1) evaluation, convex-hull bounds | Akella, Huang, Lynch & Mason, sec. 2.1 |

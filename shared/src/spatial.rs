@@ -1,4 +1,4 @@
-//! The spatial juggler's mirror law (Rizzi & Koditschek, "Further progress in robot juggling:
+//! The spatial juggler's mirror law and a modified one with a solvable flight time (Rizzi & Koditschek, "Further progress in robot juggling:
 //! solvable mirror laws", 1994, sec. 3.1.2, eq. 13, with k(w) of eq. 5).
 //!
 //! A ball flies in 3-D, position b = (b_x, b_y, b_z) (m, b_z up) under gravity
@@ -47,6 +47,9 @@
 //! radial and lateral directions"; the radial and lateral distances above are this crate's
 //! reading.
 //!
+//! [`ModifiedSpatialLaw`] is a version with a solvable flight time, in the manner of eq. 15–16:
+//! the bar meets the ball where it crosses an [`ImpactPlane`] fixed for the flight.
+//!
 //! The rates along the ballistic flow, for a tracking controller's feed-forward, use that
 //! eta (so k), the horizontal velocity and h = b_x b_y' - b_y b_x' (the angular momentum
 //! about z per unit mass) are constant in flight. Every angle and rate is undefined over the
@@ -54,6 +57,7 @@
 
 use crate::math::Real;
 use crate::params::{finite, non_negative, positive, ParamError};
+use crate::planar::quadratic_roots;
 
 /// A ball in 3-D: position (m) and velocity (m/s), b_z up.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -170,10 +174,12 @@ pub struct SpatialLawParams<R> {
     pub kappa1_s2pm2: R,
     /// Apex height b_z to regulate to, m, > 0 (eta* = gamma times it).
     pub target_apex_m: R,
-    /// Radial proportional gain kappa10, rad/m, finite.
-    pub kappa10_radpm: R,
-    /// Radial derivative gain kappa11, rad s/m, finite.
-    pub kappa11_radspm: R,
+    /// Radial proportional gain kappa10, finite: rad/m in [`SpatialMirrorLaw`] (l1 is an
+    /// angle), dimensionless in [`ModifiedSpatialLaw`] (m of target height per m).
+    pub kappa10: R,
+    /// Radial derivative gain kappa11, finite: rad s/m in [`SpatialMirrorLaw`], s in
+    /// [`ModifiedSpatialLaw`].
+    pub kappa11: R,
     /// Lateral proportional gain kappa20, rad/m, finite.
     pub kappa20_radpm: R,
     /// Lateral derivative gain kappa21, rad s/m, finite.
@@ -201,8 +207,8 @@ impl<R: Real> SpatialMirrorLaw<R> {
         non_negative("kappa0", p.kappa0)?;
         non_negative("kappa1", p.kappa1_s2pm2)?;
         positive("target_apex_m", p.target_apex_m)?;
-        finite("kappa10", p.kappa10_radpm)?;
-        finite("kappa11", p.kappa11_radspm)?;
+        finite("kappa10", p.kappa10)?;
+        finite("kappa11", p.kappa11)?;
         finite("kappa20", p.kappa20_radpm)?;
         finite("kappa21", p.kappa21_radspm)?;
         positive("target_radius_m", p.target_radius_m)?;
@@ -246,8 +252,8 @@ impl<R: Real> SpatialMirrorLaw<R> {
     /// The radial PD term l1 = kappa10 (rho - rho*) + kappa11 rho', rad (eq. 13).
     #[inline]
     pub fn radial_term_rad(&self, ball: &SpatialBall<R>) -> R {
-        self.p.kappa10_radpm * (ball.horizontal_radius_m() - self.p.target_radius_m)
-            + self.p.kappa11_radspm * ball.radial_rate_mps()
+        self.p.kappa10 * (ball.horizontal_radius_m() - self.p.target_radius_m)
+            + self.p.kappa11 * ball.radial_rate_mps()
     }
 
     /// The lateral PD term l2 = kappa20 d + kappa21 d', rad (eq. 13).
@@ -275,18 +281,157 @@ impl<R: Real> SpatialMirrorLaw<R> {
             rates_radps: [
                 ball.azimuth_rate_radps(),
                 -k * ball.elevation_rate_radps()
-                    - self.p.kappa10_radpm * ball.radial_rate_mps()
-                    - self.p.kappa11_radspm * radial_accel,
+                    - self.p.kappa10 * ball.radial_rate_mps()
+                    - self.p.kappa11 * radial_accel,
                 self.p.kappa20_radpm * self.lateral_offset_rate_mps(ball),
             ],
         }
     }
 }
 
+/// The plane a ball meets the paddle in under [`ModifiedSpatialLaw`], fixed for a flight:
+/// through the base, containing the horizontal line across azimuth phi_l, rising at
+/// elevation e_l0 over azimuth phi_l. Its normal is
+/// n_l = (-sin e_l0 cos phi_l, -sin e_l0 sin phi_l, cos e_l0); in azimuth phi it rises at
+/// e_l(phi) = atan(tan e_l0 cos(phi - phi_l)).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ImpactPlane<R> {
+    /// phi_l, rad.
+    pub azimuth_rad: R,
+    /// e_l0, rad, in (-pi/2, pi/2).
+    pub elevation_rad: R,
+}
+
+impl<R: Real> ImpactPlane<R> {
+    /// e_l(phi) = atan2(sin e_l0 cos(phi - phi_l), cos e_l0), rad: the plane's elevation in
+    /// azimuth `azimuth_rad`.
+    #[inline]
+    pub fn elevation_at(&self, azimuth_rad: R) -> R {
+        let delta = azimuth_rad - self.azimuth_rad;
+        (self.elevation_rad.sin() * delta.cos()).atan2(self.elevation_rad.cos())
+    }
+
+    /// de_l/dphi = -sin e_l0 cos e_l0 sin(phi - phi_l) / (cos^2 e_l0 + sin^2 e_l0 cos^2(phi - phi_l)),
+    /// rad per rad of azimuth.
+    #[inline]
+    pub fn slope_at(&self, azimuth_rad: R) -> R {
+        let delta = azimuth_rad - self.azimuth_rad;
+        let (s, c) = (self.elevation_rad.sin(), self.elevation_rad.cos());
+        let sc = s * delta.cos();
+        -s * c * delta.sin() / (c * c + sc * sc)
+    }
+}
+
+/// The modified spatial law with a solvable flight time, in the manner of eq. 15–16 (the
+/// paper says only that one exists, "related to (13)" as eq. 15 is to eq. 12; this is this
+/// crate's construction, docs/spatial.md):
+///
+/// ```text
+/// r1 = phi_b
+/// r2 = -pi/2 - k e_b + (1 + k) e_l(phi_b)
+/// r3 = l2(w_bar)
+/// e_l0 = atan2(kappa10 (rho_bar - rho*) + kappa11 rho_bar', rho_bar),   phi_l = phi_bar
+/// ```
+///
+/// with w_bar the apex of the current flight, so k, the [`ImpactPlane`] and r3 are constant
+/// in flight. The bar meets the ball (e_r = e_b) iff (1 + k)(e_l(phi_b) - e_b) = 0, i.e. when
+/// the ball crosses the impact plane: a linear condition in b, so the flight time solves a
+/// quadratic ([`ModifiedSpatialLaw::impact_time_s`]). In the plane through the base
+/// (b_y = b_y' = 0) it is [`crate::planar::ModifiedPlanarLaw`] (eq. 15–16).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModifiedSpatialLaw<R> {
+    law: SpatialMirrorLaw<R>,
+}
+
+impl<R: Real> ModifiedSpatialLaw<R> {
+    /// The law of `p` (kappa10 dimensionless, kappa11 in s: the PD term is a height); an
+    /// error names the first parameter out of its range.
+    pub fn new(p: SpatialLawParams<R>) -> Result<Self, ParamError> {
+        Ok(Self {
+            law: SpatialMirrorLaw::new(p)?,
+        })
+    }
+
+    /// The mirror gain k(w), dimensionless (eq. 5).
+    #[inline]
+    pub fn gain(&self, ball: &SpatialBall<R>) -> R {
+        self.law.gain(ball)
+    }
+
+    /// The apex of the ball's current flight and the time to it, `(F^ta(w), t_a)` with
+    /// t_a = b_z'/gamma, s (eq. 17; negative once the ball falls: the apex it fell from).
+    #[inline]
+    pub fn apex_state(&self, ball: &SpatialBall<R>) -> (SpatialBall<R>, R) {
+        let g = self.law.p.gravity_mps2;
+        let t_a = ball.velocity_mps[2] / g;
+        let mut apex = ball.flown(t_a, g);
+        apex.velocity_mps[2] = R::ZERO; // exact by definition; removes rounding
+        (apex, t_a)
+    }
+
+    /// The impact plane of the flight through `apex`.
+    #[inline]
+    pub fn impact_plane(&self, apex: &SpatialBall<R>) -> ImpactPlane<R> {
+        let p = &self.law.p;
+        let rho = apex.horizontal_radius_m();
+        let height = p.kappa10 * (rho - p.target_radius_m) + p.kappa11 * apex.radial_rate_mps();
+        ImpactPlane {
+            azimuth_rad: apex.azimuth_rad(),
+            elevation_rad: height.atan2(rho),
+        }
+    }
+
+    /// The joint references and their rates along the flow:
+    /// r1' = phi_b', r2' = -k e_b' + (1 + k) e_l'(phi_b) phi_b', r3' = 0.
+    pub fn reference(&self, ball: &SpatialBall<R>) -> JointReference<R> {
+        let k = self.gain(ball);
+        let (apex, _) = self.apex_state(ball);
+        let plane = self.impact_plane(&apex);
+        let (phi, phi_dot) = (ball.azimuth_rad(), ball.azimuth_rate_radps());
+        JointReference {
+            angles_rad: [
+                phi,
+                -R::HALF * R::PI - k * ball.elevation_rad()
+                    + (R::ONE + k) * plane.elevation_at(phi),
+                self.law.lateral_term_rad(&apex),
+            ],
+            rates_radps: [
+                phi_dot,
+                -k * ball.elevation_rate_radps() + (R::ONE + k) * plane.slope_at(phi) * phi_dot,
+                R::ZERO,
+            ],
+        }
+    }
+
+    /// Time after the apex, s, at which the ball falling from `apex` crosses `plane` (where
+    /// the bar meets it): the smallest root t >= 0 of
+    /// `n_l . b(t) = 0`, i.e. `(gamma c/2) t^2 + (s h' - c z') t + (s h - c z) = 0` with
+    /// (s, c) = (sin e_l0, cos e_l0) and h = b_x cos phi_l + b_y sin phi_l, at which the ball
+    /// descends and is over the plane's own side (h > 0); `None` if there is none.
+    pub fn impact_time_s(&self, apex: &SpatialBall<R>, plane: &ImpactPlane<R>) -> Option<R> {
+        let (s, c) = (plane.elevation_rad.sin(), plane.elevation_rad.cos());
+        let (cp, sp) = (plane.azimuth_rad.cos(), plane.azimuth_rad.sin());
+        let along = |v: [R; 3]| v[0] * cp + v[1] * sp;
+        let g = self.law.p.gravity_mps2;
+        let roots = quadratic_roots(
+            R::HALF * g * c,
+            s * along(apex.velocity_mps) - c * apex.velocity_mps[2],
+            s * along(apex.position_m) - c * apex.position_m[2],
+        )?;
+        roots.into_iter().find(|&t| {
+            let b = apex.flown(t, g);
+            t >= R::ZERO
+                && t.is_finite()
+                && b.velocity_mps[2] <= R::ZERO
+                && along(b.position_m) > R::ZERO
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::planar::{PlanarBall, PlanarMirrorLaw};
+    use crate::planar::{ModifiedPlanarLaw, PlanarBall, PlanarMirrorLaw};
     use core::f64::consts::{FRAC_PI_2, PI};
 
     const G: f64 = 9.81;
@@ -296,8 +441,8 @@ mod tests {
             kappa0: 0.3,
             kappa1_s2pm2: 0.02,
             target_apex_m: 0.8,
-            kappa10_radpm: -0.4,
-            kappa11_radspm: -0.2,
+            kappa10: -0.4,
+            kappa11: -0.2,
             kappa20_radpm: 0.5,
             kappa21_radspm: 0.15,
             target_radius_m: 0.9,
@@ -358,8 +503,8 @@ mod tests {
             p.kappa0,
             p.kappa1_s2pm2,
             p.target_apex_m,
-            -p.kappa10_radpm,
-            -p.kappa11_radspm,
+            -p.kappa10,
+            -p.kappa11,
             p.target_radius_m,
             G,
         )
@@ -428,6 +573,150 @@ mod tests {
         }
     }
 
+    fn modified() -> ModifiedSpatialLaw<f64> {
+        ModifiedSpatialLaw::new(SpatialLawParams {
+            kappa10: 0.3,
+            kappa11: 0.1,
+            target_azimuth_rad: 0.2,
+            ..params()
+        })
+        .unwrap()
+    }
+
+    /// In the plane through the base the modified law is the modified planar law (eq. 15–16,
+    /// independent code): the same shoulder reference, rate and impact time.
+    #[test]
+    fn modified_in_the_plane_through_the_base_is_the_modified_planar_law() {
+        let p = params();
+        let planar = ModifiedPlanarLaw::new(
+            p.kappa0,
+            p.kappa1_s2pm2,
+            p.target_apex_m,
+            0.3,
+            0.1,
+            p.target_radius_m,
+            G,
+        )
+        .unwrap();
+        let law = ModifiedSpatialLaw::new(SpatialLawParams {
+            kappa10: 0.3,
+            kappa11: 0.1,
+            ..p
+        })
+        .unwrap();
+        for i in 0..6 {
+            for j in 0..6 {
+                let (x, z) = (0.4 + 0.15 * i as f64, 0.2 + 0.25 * j as f64);
+                let (u, w) = (-0.3 + 0.1 * j as f64, 1.5 - 0.6 * i as f64);
+                let ball = SpatialBall::new([x, 0.0, z], [u, 0.0, w]);
+                let s = law.reference(&ball);
+                let q = planar.reference(&PlanarBall::new(x, z, u, w));
+                assert_eq!((s.angles_rad[0], s.rates_radps[0]), (0.0, 0.0));
+                assert!(close(s.angles_rad[1] + FRAC_PI_2, q.angle_rad, 1e-13));
+                assert!(close(s.rates_radps[1], q.rate_radps, 1e-13));
+                let (apex, _) = law.apex_state(&ball);
+                let plane = law.impact_plane(&apex);
+                let (papex, _) = planar.apex_state(&PlanarBall::new(x, z, u, w));
+                let theta_l = planar.target_angle_rad(&papex);
+                assert!(close(plane.elevation_rad, theta_l, 1e-13));
+                let ts = law.impact_time_s(&apex, &plane);
+                let tp = planar.impact_time_s(&papex, theta_l);
+                match (ts, tp) {
+                    (Some(a), Some(b)) => assert!(close(a, b, 1e-12), "{a} {b}"),
+                    (a, b) => assert_eq!(a.is_some(), b.is_some(), "{a:?} {b:?}"),
+                }
+            }
+        }
+    }
+
+    /// At the impact time the bar's elevation under the law equals the ball's (the contact
+    /// condition, checked through the reference itself), with lateral motion too; just
+    /// before it they differ.
+    #[test]
+    fn modified_impact_time_is_where_the_bar_meets_the_ball() {
+        let law = modified();
+        let mut found = 0;
+        for (y, v) in [(0.0, 0.0), (0.3, -0.2), (-0.25, 0.4), (0.1, 0.6)] {
+            let ball = SpatialBall::new([0.9, y, 0.4], [0.15, v, 2.0]);
+            let (apex, t_a) = law.apex_state(&ball);
+            let plane = law.impact_plane(&apex);
+            let t = law.impact_time_s(&apex, &plane).expect("an impact");
+            let gap = |t: f64| {
+                let b = apex.flown(t, G);
+                law.reference(&b).angles_rad[1] + FRAC_PI_2 - b.elevation_rad()
+            };
+            assert!(gap(t).abs() < 1e-12, "gap {}", gap(t));
+            assert!(gap(t - 0.01).abs() > 1e-4);
+            assert!(t_a > 0.0);
+            found += 1;
+        }
+        assert_eq!(found, 4);
+    }
+
+    /// With no radial terms the impact plane is the horizontal through the base, whatever
+    /// the lateral velocity: the ball falls z_bar in sqrt(2 z_bar/gamma).
+    #[test]
+    fn modified_impact_time_by_hand() {
+        let law = ModifiedSpatialLaw::new(SpatialLawParams {
+            kappa10: 0.0,
+            kappa11: 0.0,
+            ..params()
+        })
+        .unwrap();
+        let apex = SpatialBall::new([1.0, 0.2, 1.0], [0.1, 0.5, 0.0]);
+        let plane = law.impact_plane(&apex);
+        assert_eq!(plane.elevation_rad, 0.0);
+        let t = law.impact_time_s(&apex, &plane).unwrap();
+        assert!(close(t, (2.0 / G).sqrt(), 1e-14));
+    }
+
+    /// Turning the ball and the set point about z turns the modified law's azimuth and impact
+    /// plane with them and leaves the shoulder, the roll and the impact time as they were.
+    #[test]
+    fn modified_law_turns_with_the_vertical() {
+        let b = SpatialBall::new([0.8, 0.3, 0.6], [0.2, -0.4, 1.5]);
+        let base_law = modified();
+        let base = base_law.reference(&b);
+        let (apex, _) = base_law.apex_state(&b);
+        let base_t = base_law
+            .impact_time_s(&apex, &base_law.impact_plane(&apex))
+            .unwrap();
+        for a in [0.4f64, 1.7, -2.5] {
+            let (c, s) = (a.cos(), a.sin());
+            let turn = |[x, y, z]: [f64; 3]| [c * x - s * y, s * x + c * y, z];
+            let law = ModifiedSpatialLaw::new(SpatialLawParams {
+                target_azimuth_rad: 0.2 + a,
+                ..*base_law.law.params()
+            })
+            .unwrap();
+            let turned = SpatialBall::new(turn(b.position_m), turn(b.velocity_mps));
+            let r = law.reference(&turned);
+            for i in 1..3 {
+                assert!(close(r.angles_rad[i], base.angles_rad[i], 1e-12));
+                assert!(close(r.rates_radps[i], base.rates_radps[i], 1e-12));
+            }
+            let (apex, _) = law.apex_state(&turned);
+            let t = law.impact_time_s(&apex, &law.impact_plane(&apex)).unwrap();
+            assert!(close(t, base_t, 1e-12), "{t} {base_t}");
+        }
+    }
+
+    #[test]
+    fn modified_rates_are_the_derivatives_along_the_flight() {
+        let law = modified();
+        let b = SpatialBall::new([0.7, -0.4, 0.9], [0.35, 0.5, 1.2]);
+        let h = 1e-5;
+        for t in [0.0, 0.1, 0.3] {
+            let at = |dt: f64| law.reference(&b.flown(t + dt, G)).angles_rad;
+            let (ahead, behind) = (at(h), at(-h));
+            let r = law.reference(&b.flown(t, G));
+            for i in 0..3 {
+                let fd = (ahead[i] - behind[i]) / (2.0 * h);
+                assert!(close(r.rates_radps[i], fd, 1e-7), "joint {i} at {t}: {fd}");
+            }
+        }
+    }
+
     #[test]
     fn parameters_out_of_range_are_named() {
         let cases: [(SpatialLawParams<f64>, &str); 5] = [
@@ -480,8 +769,8 @@ mod tests {
             kappa0: p.kappa0 as f32,
             kappa1_s2pm2: p.kappa1_s2pm2 as f32,
             target_apex_m: p.target_apex_m as f32,
-            kappa10_radpm: p.kappa10_radpm as f32,
-            kappa11_radspm: p.kappa11_radspm as f32,
+            kappa10: p.kappa10 as f32,
+            kappa11: p.kappa11 as f32,
             kappa20_radpm: p.kappa20_radpm as f32,
             kappa21_radspm: p.kappa21_radspm as f32,
             target_radius_m: p.target_radius_m as f32,
