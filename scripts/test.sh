@@ -6,7 +6,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 TARGET=thumbv7em-none-eabihf
-step() { printf '\n==> %s\n' "$*"; }
+# Each step prints the seconds since the start, so a slow step shows in the log (BENCHMARKS.md,
+# "Building", has a fresh clone's breakdown).
+step() { printf '\n==> [%d s] %s\n' "$SECONDS" "$*"; }
 die() { printf '\nerror: %s\n' "$*" >&2; exit 1; }
 
 step "checking the toolchain"
@@ -132,4 +134,4 @@ step "documentation builds without warnings"
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -q
 
 echo
-echo "all tests passed"
+echo "all tests passed in $SECONDS s"

@@ -9,4 +9,5 @@ pub mod hopper;
 pub mod impact;
 pub mod line;
 pub mod planar;
+pub mod spatial;
 pub mod surface;
