@@ -455,6 +455,25 @@ mod tests {
         (a - b).abs() <= tol * (1.0 + b.abs())
     }
 
+    /// Each joint rate of `reference` equals the central difference of its angle along the
+    /// exact flight of one ball, at each of `times` (s).
+    fn assert_rates_are_derivatives(
+        reference: impl Fn(&SpatialBall<f64>) -> JointReference<f64>,
+        times: &[f64],
+    ) {
+        let b = SpatialBall::new([0.7, -0.4, 0.9], [0.35, 0.5, 1.2]);
+        let h = 1e-5;
+        for &t in times {
+            let at = |dt: f64| reference(&b.flown(t + dt, G)).angles_rad;
+            let (ahead, behind) = (at(h), at(-h));
+            let r = reference(&b.flown(t, G));
+            for i in 0..3 {
+                let fd = (ahead[i] - behind[i]) / (2.0 * h);
+                assert!(close(r.rates_radps[i], fd, 1e-7), "joint {i} at {t}: {fd}");
+            }
+        }
+    }
+
     #[test]
     fn ball_angles_and_rates_by_hand() {
         // b = (3, 4, 12): rho = 5, |b| = 13; b' = (1, -2, 3)
@@ -560,17 +579,7 @@ mod tests {
             ..params()
         })
         .unwrap();
-        let b = SpatialBall::new([0.7, -0.4, 0.9], [0.35, 0.5, 1.2]);
-        let h = 1e-5;
-        for t in [0.0, 0.1, 0.25] {
-            let at = |dt: f64| law.reference(&b.flown(t + dt, G)).angles_rad;
-            let (ahead, behind) = (at(h), at(-h));
-            let r = law.reference(&b.flown(t, G));
-            for i in 0..3 {
-                let fd = (ahead[i] - behind[i]) / (2.0 * h);
-                assert!(close(r.rates_radps[i], fd, 1e-7), "joint {i} at {t}: {fd}");
-            }
-        }
+        assert_rates_are_derivatives(|b| law.reference(b), &[0.0, 0.1, 0.25]);
     }
 
     fn modified() -> ModifiedSpatialLaw<f64> {
@@ -704,17 +713,7 @@ mod tests {
     #[test]
     fn modified_rates_are_the_derivatives_along_the_flight() {
         let law = modified();
-        let b = SpatialBall::new([0.7, -0.4, 0.9], [0.35, 0.5, 1.2]);
-        let h = 1e-5;
-        for t in [0.0, 0.1, 0.3] {
-            let at = |dt: f64| law.reference(&b.flown(t + dt, G)).angles_rad;
-            let (ahead, behind) = (at(h), at(-h));
-            let r = law.reference(&b.flown(t, G));
-            for i in 0..3 {
-                let fd = (ahead[i] - behind[i]) / (2.0 * h);
-                assert!(close(r.rates_radps[i], fd, 1e-7), "joint {i} at {t}: {fd}");
-            }
-        }
+        assert_rates_are_derivatives(|b| law.reference(b), &[0.0, 0.1, 0.3]);
     }
 
     #[test]

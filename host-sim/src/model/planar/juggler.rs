@@ -190,10 +190,7 @@ fn arr(b: &PlanarBall<f64>) -> [f64; 4] {
 impl PlanarJuggler {
     /// A juggler: `restitution` alpha in (0, 1], `gravity_mps2` gamma > 0 (the law's own).
     pub fn new(law: JugglerLaw, restitution: f64, gravity_mps2: f64) -> Result<Self, ParamError> {
-        let restitution = within("restitution", restitution, 0.0, 1.0)?;
-        if restitution == 0.0 {
-            return Err(ParamError::NotPositive("restitution"));
-        }
+        let restitution = positive("restitution", within("restitution", restitution, 0.0, 1.0)?)?;
         Ok(Self {
             law,
             restitution,

@@ -181,10 +181,7 @@ fn least_radius_m(apex: &SpatialBall<f64>, window: f64) -> f64 {
 impl SpatialJuggler {
     /// A juggler: `restitution` alpha in (0, 1], `gravity_mps2` gamma > 0 (the law's own).
     pub fn new(law: SpatialLaw, restitution: f64, gravity_mps2: f64) -> Result<Self, ParamError> {
-        let restitution = within("restitution", restitution, 0.0, 1.0)?;
-        if restitution == 0.0 {
-            return Err(ParamError::NotPositive("restitution"));
-        }
+        let restitution = positive("restitution", within("restitution", restitution, 0.0, 1.0)?)?;
         Ok(Self {
             law,
             restitution,
@@ -328,7 +325,8 @@ fn mirror_contact_s(
     }
     let window = window_s(apex, g);
     let rho_min = least_radius_m(apex, window);
-    if !(rho_min > 1e-9 * (1.0 + apex.radius_m())) {
+    // NaN or a pass over the base: no azimuth to follow
+    if rho_min.is_nan() || rho_min <= 1e-9 * (1.0 + apex.radius_m()) {
         return Err(SpatialEnd::OverBase);
     }
     let p = law.params();
