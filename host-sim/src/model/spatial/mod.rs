@@ -333,8 +333,11 @@ fn mirror_contact_s(
     let (k10, k11) = (p.kappa10 / (1.0 + k), p.kappa11 / (1.0 + k));
     let gap = |t: f64| {
         let b = apex.flown(t, g);
-        let (rho, rho_dot) = (b.horizontal_radius_m(), b.radial_rate_mps());
-        let lateral = b.lateral_velocity_mps();
+        // one square root per evaluation (the ball's own accessors take one each)
+        let ([x, y, _], [u, v, _]) = (b.position_m, b.velocity_mps);
+        let rho = (x * x + y * y).sqrt();
+        let rho_dot = (x * u + y * v) / rho;
+        let lateral = (x * v - y * u) / rho;
         let rho_ddot = lateral * lateral / rho;
         let psi = -(k10 * (rho - p.target_radius_m) + k11 * rho_dot);
         let psi_dot = -(k10 * rho_dot + k11 * rho_ddot);
