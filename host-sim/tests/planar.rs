@@ -10,9 +10,9 @@ use dexter_core::tilt::{
     energy_eigenvalue, impact as core_impact, impact_normal, kappa_crit, point_mass_angle_after,
     tilt_eigenvalues,
 };
+use dexter_sim::engine::eigen::eigenvalues;
 use dexter_sim::model::planar::analysis::{analyze, Verdict};
 use dexter_sim::model::planar::contact::{first_contact, Gap};
-use dexter_sim::model::planar::eigen::eigenvalues;
 use dexter_sim::model::planar::impact::{coulomb, FrictionMode, ImpactGeometry};
 use dexter_sim::model::planar::juggler::JugglerParams;
 use dexter_sim::model::planar::stats::{classify, stability_map, CellClass};

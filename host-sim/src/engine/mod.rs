@@ -4,7 +4,9 @@
 //! closed form (the line's drag, [`drag`]; the hopper's stance; the arm's joint and roll).
 
 pub mod drag;
+pub mod eigen;
 pub mod flight;
+pub mod linearize;
 pub mod locate;
 pub mod ode;
 pub mod roots;

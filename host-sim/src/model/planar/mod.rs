@@ -53,13 +53,12 @@
 //! its apex, atan(2 h / b) = atan(4) = 1.3258 rad, where a base corner drops below the apex).
 //!
 //! Submodules: [`params`] (the scene's `[planar]` table), [`analysis`] (fixed point,
-//! finite-difference Jacobian, eigenvalues, verdict; stability map), [`eigen`] (small real
-//! eigenvalue solver), [`juggler`] (the planar juggler).
+//! the engine's linearization at it, verdict; stability map), [`juggler`] (the planar
+//! juggler).
 
 pub mod analysis;
 pub mod camera;
 pub mod contact;
-pub mod eigen;
 pub mod impact;
 pub mod juggler;
 pub mod params;

@@ -35,10 +35,33 @@
 use super::planar::contact::{first_root, ContactError};
 use dexter_core::params::{positive, within, ParamError};
 use dexter_core::spatial::{ModifiedSpatialLaw, SpatialBall, SpatialLawParams, SpatialMirrorLaw};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+
+pub mod analysis;
 
 /// Most impacts of one run.
 pub const MAX_BATS: usize = 100_000;
+
+/// Which law, by name (the scene's `spatial_juggler.law`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Law {
+    /// eq. 13 ([`SpatialMirrorLaw`]).
+    #[default]
+    Mirror,
+    /// The modified law with a solvable flight time ([`ModifiedSpatialLaw`]).
+    Modified,
+}
+
+impl Law {
+    /// The scene value (`mirror`, `modified`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Law::Mirror => "mirror",
+            Law::Modified => "modified",
+        }
+    }
+}
 
 /// Which law the paddle tracks.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -96,6 +119,14 @@ impl SpatialParams {
     pub fn modified(&self) -> Result<SpatialJuggler, ParamError> {
         let law = SpatialLaw::Modified(ModifiedSpatialLaw::new(self.law)?);
         SpatialJuggler::new(law, self.restitution, self.law.gravity_mps2)
+    }
+
+    /// A juggler tracking `law`.
+    pub fn juggler(&self, law: Law) -> Result<SpatialJuggler, ParamError> {
+        match law {
+            Law::Mirror => self.mirror(),
+            Law::Modified => self.modified(),
+        }
     }
 }
 
@@ -368,4 +399,4 @@ fn mirror_contact_s(
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

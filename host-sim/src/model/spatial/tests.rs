@@ -6,7 +6,7 @@ const G: f64 = 9.81;
 
 /// The planar juggler's parameters that the spatial defaults reduce to in the plane through
 /// the base (radial gains negated back).
-fn planar_twin(p: &SpatialParams) -> JugglerParams {
+pub(super) fn planar_twin(p: &SpatialParams) -> JugglerParams {
     JugglerParams {
         restitution: p.restitution,
         gravity_mps2: p.law.gravity_mps2,
