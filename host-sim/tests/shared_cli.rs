@@ -82,6 +82,7 @@ fn missing_directories_are_created_for_every_system() {
         ("planar-triangle", "run", "--trace"),
         ("hopper-fig11", "run", "--trace"),
         ("planar-juggler", "run", "--trace"),
+        ("spatial-juggler", "run", "--trace"),
     ];
     for (name, verb, opt) in cases {
         let file = dir.join(name).join("deeper").join("out.csv");

@@ -155,7 +155,7 @@ fn a_feeder_radius_far_out_is_a_short_number() {
 /// Finding 14: the core's field names never stand in for the scene's keys.
 #[test]
 fn core_field_names_are_reported_as_scene_keys() {
-    let cases: [(&str, &str, &str); 4] = [
+    let cases: [(&str, &str, &str); 5] = [
         ("arm-throw", "arm.inertia_kgm2=1e300", "`arm.inertia_kgm2`"),
         (
             "arm-throw",
@@ -171,6 +171,11 @@ fn core_field_names_are_reported_as_scene_keys() {
             "planar-juggler",
             "planar_juggler.gravity_mps2=1e-320",
             "`planar_juggler.gravity_mps2`",
+        ),
+        (
+            "spatial-juggler",
+            "spatial_juggler.gravity_mps2=1e-320",
+            "`spatial_juggler.gravity_mps2`",
         ),
     ];
     for (name, set, key) in cases {

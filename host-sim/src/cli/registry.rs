@@ -4,7 +4,7 @@
 use crate::scene::SceneFile;
 use crate::system::basin::Basins;
 use crate::system::{unsupported, Analyzes, Failure, Sweeps, System};
-use crate::systems::{arm, feeder, hopper, line, planar, planar_juggler};
+use crate::systems::{arm, feeder, hopper, line, planar, planar_juggler, spatial_juggler};
 use crate::verbs::basin::BasinRequest;
 use crate::verbs::merge::{MergeRequest, ShardSet};
 use crate::verbs::{self, AnalyzeRequest, RunRequest, SweepRequest};
@@ -100,7 +100,7 @@ fn no_analysis<S: System>(_: &SceneFile, _: &AnalyzeRequest) -> Result<(), Failu
 
 /// Every system, in the order they are asked to claim a scene: the line system last (it
 /// claims every scene, so it runs those no other system claims).
-pub static SYSTEMS: [Entry; 7] = [
+pub static SYSTEMS: [Entry; 8] = [
     Entry::of::<arm::ArmSystem>(),
     Entry::of::<hopper::sampled::SampledHopperSystem>(),
     Entry::of::<feeder::FeederSystem>().sweeps::<feeder::FeederSystem>(),
@@ -108,6 +108,8 @@ pub static SYSTEMS: [Entry; 7] = [
         .sweeps::<hopper::HopperSystem>()
         .analyzes::<hopper::HopperSystem>(),
     Entry::of::<planar_juggler::PlanarJugglerSystem>(),
+    Entry::of::<spatial_juggler::SpatialJugglerSystem>()
+        .analyzes::<spatial_juggler::SpatialJugglerSystem>(),
     Entry::of::<planar::PlanarSystem>()
         .sweeps::<planar::PlanarSystem>()
         .analyzes::<planar::PlanarSystem>(),

@@ -8,6 +8,7 @@
 //! | [`hopper::sampled`] | `[hopper]` with `[hopper.control]` | the hopper's thrust valve switched by the core's fixed-rate controller (SIL, `--hil`) |
 //! | [`hopper`] | `[hopper]` | Koditschek & Bühler's vertical hopper: return maps, period doubling |
 //! | [`planar_juggler`] | `[planar_juggler]` | Rizzi & Koditschek's planar juggler, mirror law eq. 12 or the modified law eq. 15 |
+//! | [`spatial_juggler`] | `[spatial_juggler]` | Rizzi & Koditschek's spatial juggler, eq. 13 or the modified law |
 //! | [`planar`] | `[planar]` | Zumel & Erdmann's bouncing body on the kappa-tilt table |
 //! | [`line`](mod@line) | any other (`[physics]`, `[control]`, ...) | the line juggler and the passive bounce |
 //!
@@ -19,3 +20,4 @@ pub mod hopper;
 pub mod line;
 pub mod planar;
 pub mod planar_juggler;
+pub mod spatial_juggler;
