@@ -10,7 +10,7 @@
 //!
 //! Which kinds an image hosts is a cargo feature selection (firmware/Cargo.toml): the line
 //! juggler and the link check always; the tilt table (`tilt`), the hopper (`hop`) and the
-//! one-joint arm (`arm`) each behind its feature. The default image (`tilt`, `hop`) is the
+//! one-joint arm (`arm`) and the spatial juggler (`spatial`) each behind its feature. The default image (`tilt`, `hop`) is the
 //! one `memory.x`'s 32 KiB of flash was sized for; the arm image is built with
 //! `--no-default-features --features arm` (firmware/README.md, "Images"). A kind's
 //! `if <cfg predicate>` in that list gates its variant and every match arm on it.

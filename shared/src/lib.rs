@@ -58,6 +58,7 @@ pub mod params;
 pub mod planar;
 pub mod protocol;
 pub mod spatial;
+pub mod spatial_control;
 pub mod state;
 pub mod tilt;
 pub mod tilt_control;

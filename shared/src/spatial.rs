@@ -58,6 +58,7 @@
 use crate::math::Real;
 use crate::params::{finite, non_negative, positive, ParamError};
 use crate::planar::quadratic_roots;
+use serde::{Deserialize, Serialize};
 
 /// A ball in 3-D: position (m) and velocity (m/s), b_z up.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -166,7 +167,8 @@ pub struct JointReference<R> {
 }
 
 /// The parameters of [`SpatialMirrorLaw`].
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SpatialLawParams<R> {
     /// Mirror gain at the target energy, dimensionless, >= 0.
     pub kappa0: R,
@@ -192,6 +194,131 @@ pub struct SpatialLawParams<R> {
     pub gravity_mps2: R,
 }
 
+impl<R: Real> SpatialLawParams<R> {
+    /// Gains that converge (docs/spatial.md, "Gains that converge") for restitution
+    /// `alpha`, gravity `gamma` (m/s^2), the apex h* (m) over (rho*, phi*) (m, rad), under
+    /// eq. 13 (`modified` false) or the modified law: kappa0 matched, (1 - alpha)/(1 + alpha);
+    /// kappa1 = 0.5/((1 + alpha) v*^2) (eq. 8's slope 1/2); the planar juggler's radial gains
+    /// (0.12, 0.08), negated under eq. 13 (its `-l1`); the lateral gains half of deadbeat,
+    /// kappa21 = -1/(4 v*), kappa20 = -1/(4 v* T), with v*^2 = 2 gamma h* and T = 2 v*/gamma.
+    /// Not validated: [`SpatialMirrorLaw::new`] is.
+    pub fn suggested(
+        modified: bool,
+        alpha: R,
+        gamma: R,
+        apex_m: R,
+        radius_m: R,
+        azimuth_rad: R,
+    ) -> Self {
+        let two = R::ONE + R::ONE;
+        let v = (two * gamma * apex_m).sqrt();
+        let flight_s = two * v / gamma;
+        let radial = if modified { R::ONE } else { -R::ONE };
+        Self {
+            kappa0: (R::ONE - alpha) / (R::ONE + alpha),
+            kappa1_s2pm2: R::HALF / ((R::ONE + alpha) * v * v),
+            target_apex_m: apex_m,
+            kappa10: radial * R::of(0.12),
+            kappa11: radial * R::of(0.08),
+            kappa20_radpm: -R::HALF / (two * v * flight_s),
+            kappa21_radspm: -R::HALF / (two * v),
+            target_radius_m: radius_m,
+            target_azimuth_rad: azimuth_rad,
+            gravity_mps2: gamma,
+        }
+    }
+}
+
+/// The paddle's orientation and angular velocity at joint angles (q1, q2, q3) and rates
+/// (module docs' conventions; docs/spatial.md derives them): the bar
+/// u = (cos e cos q1, cos e sin q1, sin e), e = q2 + pi/2; the normal of the paddle,
+/// n = cos q3 n0 + sin q3 t with n0 = du/de = (-sin e cos q1, -sin e sin q1, cos e) and
+/// t = (-sin q1, cos q1, 0); and omega = q1' z - e' t - q3' u (rad/s), so that
+/// du/dt = omega x u and dn/dt = omega x n (with (u, t, n0) right-handed,
+/// (-t) x u = n0 and (-u) x n0 = t). The paddle is the plane through the base with normal
+/// n; the signed distance of a point b from it is n . b, positive on the side n points to.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PaddleFrame<R> {
+    /// The bar's direction u, unit.
+    pub bar: [R; 3],
+    /// The paddle's unit normal n.
+    pub normal: [R; 3],
+    /// The paddle's angular velocity omega, rad/s.
+    pub angular_velocity_radps: [R; 3],
+}
+
+/// The cross product a x b.
+#[inline]
+pub fn cross<R: Real>(a: &[R; 3], b: &[R; 3]) -> [R; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// The dot product a . b.
+#[inline]
+pub fn dot<R: Real>(a: &[R; 3], b: &[R; 3]) -> R {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+impl<R: Real> PaddleFrame<R> {
+    /// The frame from (sin, cos) of q1, of e = q2 + pi/2 and of q3 (the caller picks the
+    /// sine source: the controller a polynomial, the simulator f64's own), and the joint
+    /// rates (q1', q2', q3'), rad/s (e' = q2').
+    #[inline]
+    pub fn from_sin_cos(sc: [(R, R); 3], rates_radps: [R; 3]) -> Self {
+        let [(s1, c1), (se, ce), (s3, c3)] = sc;
+        let bar = [ce * c1, ce * s1, se];
+        let n0 = [-se * c1, -se * s1, ce];
+        let t = [-s1, c1, R::ZERO];
+        let [q1_dot, e_dot, q3_dot] = rates_radps;
+        Self {
+            bar,
+            normal: core::array::from_fn(|i| c3 * n0[i] + s3 * t[i]),
+            angular_velocity_radps: core::array::from_fn(|i| {
+                -e_dot * t[i] - q3_dot * bar[i] + if i == 2 { q1_dot } else { R::ZERO }
+            }),
+        }
+    }
+
+    /// Signed distance of `point_m` from the paddle's plane, n . b, m.
+    #[inline]
+    pub fn gap_m(&self, point_m: &[R; 3]) -> R {
+        dot(&self.normal, point_m)
+    }
+
+    /// Velocity of the paddle's point at `point_m`, omega x b, m/s.
+    #[inline]
+    pub fn velocity_at_mps(&self, point_m: &[R; 3]) -> [R; 3] {
+        cross(&self.angular_velocity_radps, point_m)
+    }
+
+    /// Rate of [`Self::gap_m`] for `ball`: n . b' + (omega x n) . b, m/s.
+    #[inline]
+    pub fn gap_rate_mps(&self, ball: &SpatialBall<R>) -> R {
+        let n_dot = cross(&self.angular_velocity_radps, &self.normal);
+        dot(&self.normal, &ball.velocity_mps) + dot(&n_dot, &ball.position_m)
+    }
+
+    /// The ball's velocity after a frictionless impact with the paddle at `ball`'s position,
+    /// b'+ = b' - (1 + alpha) (n . (b' - v_p)) n with v_p the paddle's velocity there; `None`
+    /// if the ball is not approaching the paddle (n . (b' - v_p) >= 0, or NaN).
+    #[inline]
+    pub fn bounce(&self, ball: &SpatialBall<R>, restitution: R) -> Option<[R; 3]> {
+        let v_p = self.velocity_at_mps(&ball.position_m);
+        let v = ball.velocity_mps;
+        let un = dot(&self.normal, &[v[0] - v_p[0], v[1] - v_p[1], v[2] - v_p[2]]);
+        // NaN is no impact either
+        if un.partial_cmp(&R::ZERO) != Some(core::cmp::Ordering::Less) {
+            return None;
+        }
+        let j = (R::ONE + restitution) * un;
+        Some(core::array::from_fn(|i| v[i] - j * self.normal[i]))
+    }
+}
+
 /// The spatial mirror law, eq. 13 with the sign of eq. 5 restored (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpatialMirrorLaw<R> {
@@ -204,6 +331,14 @@ pub struct SpatialMirrorLaw<R> {
 impl<R: Real> SpatialMirrorLaw<R> {
     /// The law of `p`; an error names the first parameter out of its range.
     pub fn new(p: SpatialLawParams<R>) -> Result<Self, ParamError> {
+        let phi = p.target_azimuth_rad;
+        Self::with_direction(p, (phi.sin(), phi.cos()))
+    }
+
+    /// [`Self::new`] with the set point azimuth's `(sin phi*, cos phi*)` from the caller's
+    /// sine (the fixed-rate controller's polynomial, so that its image links no libm `sinf`
+    /// only for this).
+    pub fn with_direction(p: SpatialLawParams<R>, sin_cos: (R, R)) -> Result<Self, ParamError> {
         non_negative("kappa0", p.kappa0)?;
         non_negative("kappa1", p.kappa1_s2pm2)?;
         positive("target_apex_m", p.target_apex_m)?;
@@ -217,7 +352,7 @@ impl<R: Real> SpatialMirrorLaw<R> {
         Ok(Self {
             p,
             target_energy_jpkg: p.gravity_mps2 * p.target_apex_m,
-            target_direction: [p.target_azimuth_rad.cos(), p.target_azimuth_rad.sin()],
+            target_direction: [sin_cos.1, sin_cos.0],
         })
     }
 
@@ -435,6 +570,65 @@ mod tests {
     use core::f64::consts::{FRAC_PI_2, PI};
 
     const G: f64 = 9.81;
+
+    fn frame_at(q: [f64; 3], rates: [f64; 3]) -> PaddleFrame<f64> {
+        let e = q[1] + FRAC_PI_2;
+        PaddleFrame::from_sin_cos([q[0].sin_cos(), e.sin_cos(), q[2].sin_cos()], rates)
+    }
+
+    /// The bar and the normal are unit and perpendicular, and omega x u, omega x n equal
+    /// their central differences along the joint motion (independent of omega's formula).
+    #[test]
+    fn the_paddle_frame_turns_with_its_angular_velocity() {
+        let (q, w) = ([0.3, -1.2, 0.25], [0.7, -1.9, 0.4]);
+        let f = frame_at(q, w);
+        assert!((dot(&f.bar, &f.bar) - 1.0).abs() < 1e-15);
+        assert!((dot(&f.normal, &f.normal) - 1.0).abs() < 1e-15);
+        assert!(dot(&f.bar, &f.normal).abs() < 1e-15);
+        let h = 1e-6;
+        let at = |s: f64| frame_at(core::array::from_fn(|i| q[i] + w[i] * s), w);
+        let (a, b) = (at(h), at(-h));
+        let du = cross(&f.angular_velocity_radps, &f.bar);
+        let dn = cross(&f.angular_velocity_radps, &f.normal);
+        for i in 0..3 {
+            assert!(
+                (du[i] - (a.bar[i] - b.bar[i]) / (2.0 * h)).abs() < 1e-8,
+                "u {i}"
+            );
+            assert!(
+                (dn[i] - (a.normal[i] - b.normal[i]) / (2.0 * h)).abs() < 1e-8,
+                "n {i}"
+            );
+        }
+    }
+
+    /// Level paddle (e = 0, no roll): the normal is up, a ball falling at 2 m/s on a paddle
+    /// rising at e' r = 0.5 m/s leaves at 0.5 + alpha 2.5; a receding ball is no impact.
+    #[test]
+    fn a_bounce_follows_the_restitution_law_along_the_normal() {
+        let f = frame_at([0.0, -FRAC_PI_2, 0.0], [0.0, 0.5, 0.0]);
+        assert!((f.normal[2] - 1.0).abs() < 1e-15);
+        let ball = SpatialBall::new([1.0, 0.0, 0.0], [0.3, 0.0, -2.0]);
+        let v = f.bounce(&ball, 0.7).expect("approaching");
+        assert!((v[2] - (0.5 + 0.7 * 2.5)).abs() < 1e-12);
+        assert_eq!(v[0], 0.3);
+        let away = SpatialBall::new([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+        assert_eq!(f.bounce(&away, 0.7), None);
+        assert_eq!(f.gap_m(&[1.0, 0.0, 0.25]), 0.25);
+    }
+
+    /// The host's suggested gains are the core's: kappa0 matched, deadbeat halves.
+    #[test]
+    fn suggested_gains_by_hand() {
+        let p = SpatialLawParams::suggested(false, 0.7, G, 0.5, 1.0, 0.0);
+        let v = (2.0f64 * G * 0.5).sqrt();
+        assert!((p.kappa0 - 0.3 / 1.7).abs() < 1e-15);
+        assert!((p.kappa21_radspm + 0.25 / v).abs() < 1e-15);
+        assert!((p.kappa20_radpm + 0.25 / (v * 2.0 * v / G)).abs() < 1e-15);
+        assert_eq!((p.kappa10, p.kappa11), (-0.12, -0.08));
+        let m = SpatialLawParams::suggested(true, 0.7, G, 0.5, 1.0, 0.0);
+        assert_eq!((m.kappa10, m.kappa11), (0.12, 0.08));
+    }
 
     fn params() -> SpatialLawParams<f64> {
         SpatialLawParams {

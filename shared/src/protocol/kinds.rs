@@ -11,7 +11,10 @@
 //! image that hosts the arm): it is last, so the tags before it do not depend on the
 //! feature, and an image without it still names the kind (`Rejection::NotHosted(Kind::Arm)`)
 //! with no code for its values. That gate costs nothing on the host and saves the other
-//! images the arm's encoders (`boards/mps2-an386/memory.x` leaves little flash free).
+//! images the arm's encoders (`boards/mps2-an386/memory.x` leaves little flash free). The
+//! spatial juggler's values come after the arm's, on a bare-metal build's wire only with
+//! `wire-spatial`, which implies `wire-arm` so that its tag does not depend on the arm's
+//! feature.
 
 #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
 use crate::arm_control::ArmController;
@@ -19,6 +22,8 @@ use crate::control::Controller;
 use crate::echo::Echo;
 use crate::fixed_rate::{Fault, FixedRate, Mode, Reply};
 use crate::hop_control::HopController;
+#[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+use crate::spatial_control::SpatialController;
 use crate::tilt_control::{sincos::SinCos, TiltController, TiltControllerWith};
 use serde::{Deserialize, Serialize};
 
@@ -63,11 +68,21 @@ pub enum Kind {
     /// The one-joint arm: a planned B-spline tracked with torque limits
     /// ([`ArmController`]).
     Arm,
+    /// The spatial juggler: eq. 13, a three-axis ball estimator and three joint trackers
+    /// (`SpatialController`).
+    Spatial,
 }
 
 impl Kind {
     /// Every kind, in wire order.
-    pub const ALL: &'static [Kind] = &[Kind::Line, Kind::Echo, Kind::Tilt, Kind::Hop, Kind::Arm];
+    pub const ALL: &'static [Kind] = &[
+        Kind::Line,
+        Kind::Echo,
+        Kind::Tilt,
+        Kind::Hop,
+        Kind::Arm,
+        Kind::Spatial,
+    ];
 }
 
 /// A controller kind and its parameters ([`HostMessage::Configure`](super::HostMessage)).
@@ -84,6 +99,9 @@ pub enum Config {
     /// [`Kind::Arm`]'s parameters (on a bare-metal build only with `wire-arm`).
     #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
     Arm(<ArmController as FixedRate>::Params),
+    /// [`Kind::Spatial`]'s parameters (on a bare-metal build only with `wire-spatial`).
+    #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+    Spatial(<SpatialController as FixedRate>::Params),
 }
 
 /// One sample of the plant for a controller kind ([`HostMessage::Sensor`](super::HostMessage)).
@@ -100,6 +118,9 @@ pub enum Frame {
     /// [`Kind::Arm`]'s frame (on a bare-metal build only with `wire-arm`).
     #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
     Arm(<ArmController as FixedRate>::Frame),
+    /// [`Kind::Spatial`]'s frame (on a bare-metal build only with `wire-spatial`).
+    #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+    Spatial(<SpatialController as FixedRate>::Frame),
 }
 
 /// One control period's output of a controller kind
@@ -117,6 +138,9 @@ pub enum Command {
     /// [`Kind::Arm`]'s command (on a bare-metal build only with `wire-arm`).
     #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
     Arm(<ArmController as FixedRate>::Command),
+    /// [`Kind::Spatial`]'s command (on a bare-metal build only with `wire-spatial`).
+    #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+    Spatial(<SpatialController as FixedRate>::Command),
 }
 
 impl Config {
@@ -129,6 +153,8 @@ impl Config {
             Config::Hop(_) => Kind::Hop,
             #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
             Config::Arm(_) => Kind::Arm,
+            #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+            Config::Spatial(_) => Kind::Spatial,
         }
     }
 
@@ -144,6 +170,10 @@ impl Config {
             Kind::Arm => Config::Arm(Default::default()),
             #[cfg(not(any(not(target_os = "none"), feature = "wire-arm")))]
             Kind::Arm => return None,
+            #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+            Kind::Spatial => Config::Spatial(Default::default()),
+            #[cfg(not(any(not(target_os = "none"), feature = "wire-spatial")))]
+            Kind::Spatial => return None,
         })
     }
 }
@@ -158,6 +188,8 @@ impl Frame {
             Frame::Hop(_) => Kind::Hop,
             #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
             Frame::Arm(_) => Kind::Arm,
+            #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+            Frame::Spatial(_) => Kind::Spatial,
         }
     }
 
@@ -173,6 +205,10 @@ impl Frame {
             Kind::Arm => Frame::Arm(Default::default()),
             #[cfg(not(any(not(target_os = "none"), feature = "wire-arm")))]
             Kind::Arm => return None,
+            #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+            Kind::Spatial => Frame::Spatial(Default::default()),
+            #[cfg(not(any(not(target_os = "none"), feature = "wire-spatial")))]
+            Kind::Spatial => return None,
         })
     }
 }
@@ -187,6 +223,8 @@ impl Command {
             Command::Hop(_) => Kind::Hop,
             #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
             Command::Arm(_) => Kind::Arm,
+            #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+            Command::Spatial(_) => Kind::Spatial,
         }
     }
 
@@ -202,6 +240,10 @@ impl Command {
             Kind::Arm => Command::Arm(Default::default()),
             #[cfg(not(any(not(target_os = "none"), feature = "wire-arm")))]
             Kind::Arm => return None,
+            #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+            Kind::Spatial => Command::Spatial(Default::default()),
+            #[cfg(not(any(not(target_os = "none"), feature = "wire-spatial")))]
+            Kind::Spatial => return None,
         })
     }
 
@@ -214,6 +256,8 @@ impl Command {
             Command::Hop(c) => (c.seq(), c.mode(), c.fault()),
             #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
             Command::Arm(c) => (c.seq(), c.mode(), c.fault()),
+            #[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+            Command::Spatial(c) => (c.seq(), c.mode(), c.fault()),
         }
     }
 }
@@ -290,6 +334,7 @@ macro_rules! wire {
 ///     Tilt($crate::tilt_control::TiltController) if feature = "tilt",
 ///     Hop($crate::hop_control::HopController) if feature = "hop",
 ///     Arm($crate::arm_control::ArmController) if feature = "arm",
+///     Spatial($crate::spatial_control::SpatialController) if feature = "spatial",
 /// }
 /// ```
 #[macro_export]
@@ -301,6 +346,7 @@ macro_rules! for_each_kind {
             Tilt($crate::tilt_control::TiltController) if feature = "tilt",
             Hop($crate::hop_control::HopController) if feature = "hop",
             Arm($crate::arm_control::ArmController) if feature = "arm",
+            Spatial($crate::spatial_control::SpatialController) if feature = "spatial",
         }
     };
 }
@@ -314,3 +360,5 @@ wire!(impl<T: SinCos> TiltControllerWith<T> => Tilt);
 wire!(HopController => Hop);
 #[cfg(any(not(target_os = "none"), feature = "wire-arm"))]
 wire!(ArmController => Arm);
+#[cfg(any(not(target_os = "none"), feature = "wire-spatial"))]
+wire!(SpatialController => Spatial);

@@ -117,7 +117,14 @@ fn wire_maps_each_kind_to_its_own_variants_only() {
     assert!(<Echo as Wire>::params_of(&config).is_none());
     assert_eq!(
         Kind::ALL,
-        &[Kind::Line, Kind::Echo, Kind::Tilt, Kind::Hop, Kind::Arm]
+        &[
+            Kind::Line,
+            Kind::Echo,
+            Kind::Tilt,
+            Kind::Hop,
+            Kind::Arm,
+            Kind::Spatial
+        ]
     );
 }
 

@@ -92,11 +92,8 @@ impl Default for SpatialParams {
 
 impl SpatialParams {
     /// Gains that converge (module docs) for `law`, restitution alpha, gravity gamma, the
-    /// apex h* (m) over (rho*, phi*) (m, rad): kappa0 matched, (1 - alpha)/(1 + alpha);
-    /// kappa1 = 0.5/((1 + alpha) v*^2) (eq. 8's slope 1/2); the planar juggler's radial
-    /// gains (0.12, 0.08), negated under eq. 13 (its `-l1`); the lateral gains half of
-    /// deadbeat, kappa21 = -1/(4 v*), kappa20 = -1/(4 v* T), v*^2 = 2 gamma h*,
-    /// T = 2 v*/gamma. Not validated: [`Self::juggler`] is.
+    /// apex h* (m) over (rho*, phi*) (m, rad): the core's [`SpatialLawParams::suggested`].
+    /// Not validated: [`Self::juggler`] is.
     pub fn suggested(
         law: Law,
         restitution: f64,
@@ -105,27 +102,16 @@ impl SpatialParams {
         radius_m: f64,
         azimuth_rad: f64,
     ) -> Self {
-        let (alpha, g) = (restitution, gravity_mps2);
-        let v = (2.0 * g * apex_m).sqrt();
-        let flight_s = 2.0 * v / g;
-        let radial = match law {
-            Law::Mirror => -1.0,
-            Law::Modified => 1.0,
-        };
         Self {
-            restitution: alpha,
-            law: SpatialLawParams {
-                kappa0: (1.0 - alpha) / (1.0 + alpha),
-                kappa1_s2pm2: 0.5 / ((1.0 + alpha) * v * v),
-                target_apex_m: apex_m,
-                kappa10: radial * 0.12,
-                kappa11: radial * 0.08,
-                kappa20_radpm: -0.5 / (2.0 * v * flight_s),
-                kappa21_radspm: -0.5 / (2.0 * v),
-                target_radius_m: radius_m,
-                target_azimuth_rad: azimuth_rad,
-                gravity_mps2: g,
-            },
+            restitution,
+            law: SpatialLawParams::suggested(
+                law == Law::Modified,
+                restitution,
+                gravity_mps2,
+                apex_m,
+                radius_m,
+                azimuth_rad,
+            ),
         }
     }
 
