@@ -162,7 +162,11 @@ impl Default for SpatialControlParams {
             kd_per_s: 100.0,
             limits: [axis(-3.0, 3.0), axis(-2.8, -0.35), axis(-1.0, 1.0)],
             home_rad: [0.0, -1.65, 0.0],
+            // low gains: the model (flight and restitution) carries the ball between
+            // samples; measured on scenes/spatial-juggler-sil.toml (docs/spatial.md)
             estimator: EstimatorParams {
+                gain_position: 0.02,
+                gain_velocity: 0.0002,
                 restitution: alpha,
                 ..EstimatorParams::default()
             },

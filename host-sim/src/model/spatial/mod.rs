@@ -38,6 +38,7 @@ use dexter_core::spatial::{ModifiedSpatialLaw, SpatialBall, SpatialLawParams, Sp
 use serde::{Deserialize, Serialize};
 
 pub mod analysis;
+pub mod sil;
 
 /// Most impacts of one run.
 pub const MAX_BATS: usize = 100_000;

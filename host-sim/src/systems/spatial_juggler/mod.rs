@@ -9,17 +9,21 @@
 
 pub mod analyze;
 pub mod plots;
+pub mod sil;
 pub mod summary;
 pub mod trace;
 
-use self::summary::SpatialOutcome;
+use self::sil::SilTable;
+use self::summary::{ControllerFigures, SpatialOutcome};
 use self::trace::SpatialRow;
 use crate::controller::StepController;
+use crate::model::spatial::sil::{self as closed_loop, SilEnd, SilPlant};
 use crate::model::spatial::{Law, SpatialEnd, SpatialJuggler, SpatialParams, MAX_BATS};
 use crate::scene::{deserialize, SceneError, SceneFile};
-use crate::system::{Failure, NoController, RunLength, Setup, System};
+use crate::system::{Failure, RunLength, Setup, System};
 use dexter_core::params::ParamError;
 use dexter_core::spatial::SpatialBall;
+use dexter_core::spatial_control::{SpatialControlParams, SpatialController};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -32,6 +36,17 @@ pub fn end_name(e: SpatialEnd) -> &'static str {
         SpatialEnd::BadContact => "bad_contact",
         SpatialEnd::OverBase => "over_base",
         SpatialEnd::NonFinite => "non_finite",
+    }
+}
+
+/// Why a closed-loop run ended, snake_case.
+pub fn sil_end_name(e: SilEnd) -> &'static str {
+    match e {
+        SilEnd::Completed => "completed",
+        SilEnd::Dropped => "dropped",
+        SilEnd::SearchCap => "search_cap",
+        SilEnd::NonFinite => "non_finite",
+        SilEnd::StepCap => "step_cap",
     }
 }
 
@@ -71,6 +86,10 @@ pub struct SpatialTable {
     pub initial_velocity_mps: [f64; 3],
     /// `impacts`: bats to simulate, 1 ..= [`MAX_BATS`].
     pub impacts: usize,
+    /// `[spatial_juggler.sil]`: run through the fixed-rate controller (camera, encoders,
+    /// joint limits) instead of perfect tracking.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sil: Option<SilTable>,
 }
 
 impl Default for SpatialTable {
@@ -92,6 +111,7 @@ impl Default for SpatialTable {
             initial_position_m: [1.06, 0.08, 0.6],
             initial_velocity_mps: [0.0; 3],
             impacts: 40,
+            sil: None,
         }
     }
 }
@@ -120,10 +140,12 @@ pub struct SpatialConfig {
     pub juggler: SpatialJuggler,
     /// The initial ball state.
     pub start: SpatialBall<f64>,
+    /// The closed loop's controller and plant (`[spatial_juggler.sil]`).
+    pub sil: Option<(SpatialControlParams, SilPlant)>,
 }
 
 /// A core parameter error with its `[spatial_juggler]` key.
-fn param_error(e: ParamError) -> SceneError {
+pub(crate) fn param_error(e: ParamError) -> SceneError {
     let name = match e {
         ParamError::NotFinite(n)
         | ParamError::NotPositive(n)
@@ -243,12 +265,17 @@ impl SpatialTable {
             ));
         }
         let start = self.start()?;
+        let sil = match &self.sil {
+            Some(t) => Some((t.controller_params(&self)?, t.plant(&self, start)?)),
+            None => None,
+        };
         Ok(SpatialConfig {
             name: name.to_string(),
             table: self,
             params,
             juggler,
             start,
+            sil,
         })
     }
 
@@ -283,7 +310,7 @@ impl System for SpatialJugglerSystem {
         max: MAX_BATS as u64,
     };
     type Config = SpatialConfig;
-    type Controller = NoController;
+    type Controller = SpatialController;
     type Row = SpatialRow;
     type Outcome = SpatialOutcome;
     type Plots = plots::SpatialPlots;
@@ -298,18 +325,53 @@ impl System for SpatialJugglerSystem {
             .config(&file.stem)
     }
 
+    /// The fixed-rate controller of a `[spatial_juggler.sil]` scene (`None`: perfect
+    /// tracking has no controller, so `--hil` is refused).
+    fn controller_params(cfg: &SpatialConfig) -> Result<Option<SpatialControlParams>, SceneError> {
+        Ok(cfg.sil.map(|(p, _)| p))
+    }
+
     fn run(
         cfg: &SpatialConfig,
-        _: Option<&mut dyn StepController<NoController>>,
+        ctrl: Option<&mut dyn StepController<SpatialController>>,
         _: &Setup,
         rows: &mut dyn FnMut(&SpatialRow),
     ) -> Result<SpatialOutcome, Failure> {
         let t0 = Instant::now();
-        let run = cfg.juggler.run(cfg.start, cfg.table.impacts);
+        let Some((params, plant)) = &cfg.sil else {
+            let run = cfg.juggler.run(cfg.start, cfg.table.impacts);
+            let wall_s = t0.elapsed().as_secs_f64();
+            for bat in &run.bats {
+                rows(&SpatialRow(*bat));
+            }
+            return Ok(SpatialOutcome::new(
+                cfg,
+                &run.bats,
+                end_name(run.end),
+                wall_s,
+            ));
+        };
+        let on_target = ctrl.is_some();
+        let mut sil;
+        let ctl: &mut dyn StepController<SpatialController> = match ctrl {
+            Some(c) => c,
+            None => {
+                sil = closed_loop::sil_controller(*params).map_err(Failure::run)?;
+                &mut sil
+            }
+        };
+        let mut bats = Vec::new();
+        let mut on_bat = |b: &_| {
+            rows(&SpatialRow(*b));
+            bats.push(*b);
+        };
+        let apex = cfg.table.target_apex_m;
+        let report = closed_loop::run(plant, apex, ctl, cfg.table.impacts, &mut on_bat)
+            .map_err(Failure::run)?;
         let wall_s = t0.elapsed().as_secs_f64();
-        for bat in &run.bats {
-            rows(&SpatialRow(*bat));
-        }
-        Ok(SpatialOutcome::new(cfg, &run, wall_s))
+        let end = sil_end_name(report.end);
+        let mut outcome = SpatialOutcome::new(cfg, &bats, end, wall_s);
+        outcome.summary.controller = Some(ControllerFigures::new(cfg, report, on_target));
+        Ok(outcome)
     }
 }

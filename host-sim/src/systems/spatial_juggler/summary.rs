@@ -1,7 +1,9 @@
 //! The spatial juggler run's summary beside the closed form, as text or one JSON object.
 
-use super::{end_name, SpatialConfig};
-use crate::model::spatial::{Law, SpatialBat, SpatialParams, SpatialRun};
+use super::SpatialConfig;
+use crate::controller::{HilReport, SafeSteps};
+use crate::model::spatial::sil::SilReport;
+use crate::model::spatial::{Law, SpatialBat, SpatialParams};
 use crate::output::{json_text, JsonStyle};
 use crate::system::Outcome;
 use dexter_core::mirror::MirrorLaw;
@@ -87,6 +89,65 @@ pub struct SpatialSummary {
     pub sim_time_s: f64,
     /// Wall-clock time, s.
     pub wall_time_s: f64,
+    /// The fixed-rate controller's figures (`[spatial_juggler.sil]` scenes only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub controller: Option<ControllerFigures>,
+}
+
+/// The closed loop's figures: the controller, where it ran, its safe steps, its tracking.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ControllerFigures {
+    /// `"sil"` (the core linked in) or `"hil"` (the firmware on a target).
+    pub runs_on: &'static str,
+    /// Control (and camera) rate, Hz.
+    pub control_rate_hz: f64,
+    /// Camera noise per coordinate, m.
+    pub camera_sigma_m: f64,
+    /// Camera latency, s.
+    pub camera_latency_s: f64,
+    /// Control steps and those answered in the safe state, by fault.
+    pub safe: SafeSteps,
+    /// Largest |reference - joint angle| at an impact, rad.
+    pub max_tracking_error_at_impact_rad: f64,
+    /// The controller's instruction budget per step on the target.
+    pub step_instruction_budget: u32,
+    /// The target's figures (`--hil`), else null.
+    pub hil: Option<HilReport>,
+}
+
+impl ControllerFigures {
+    /// The figures of `report`, a closed-loop run of `cfg`.
+    pub fn new(cfg: &SpatialConfig, report: SilReport, on_target: bool) -> Self {
+        let plant = cfg.sil.map(|(_, p)| p);
+        Self {
+            runs_on: if on_target { "hil" } else { "sil" },
+            control_rate_hz: plant.map_or(0.0, |p| 1.0 / p.dt_s),
+            camera_sigma_m: plant.map_or(0.0, |p| p.camera.sigma_m),
+            camera_latency_s: plant.map_or(0.0, |p| p.camera.latency_s),
+            safe: report.safe,
+            max_tracking_error_at_impact_rad: report.max_tracking_error_at_impact_rad,
+            step_instruction_budget: super::sil::STEP_BUDGET,
+            hil: None,
+        }
+    }
+
+    fn text(&self) -> String {
+        let mut o = format!(
+            "  controller:   {} at {} Hz, camera noise {} m, latency {} s; tracking error at impacts up to {:.3e} rad; {} of {} steps in the safe state\n",
+            self.runs_on.to_uppercase(),
+            self.control_rate_hz,
+            self.camera_sigma_m,
+            self.camera_latency_s,
+            self.max_tracking_error_at_impact_rad,
+            self.safe.safe_steps,
+            self.safe.steps
+        );
+        o += &self.safe.text();
+        if let Some(h) = &self.hil {
+            o += &format!("  {}", h.text());
+        }
+        o
+    }
 }
 
 /// A spatial juggler run's result.
@@ -118,8 +179,8 @@ fn converged_after(
 }
 
 impl SpatialOutcome {
-    /// The outcome of `run`, a run of `cfg`.
-    pub fn new(cfg: &SpatialConfig, run: &SpatialRun, wall_s: f64) -> Self {
+    /// The outcome of a run of `cfg` that made `bats` and ended for `end`.
+    pub fn new(cfg: &SpatialConfig, bats: &[SpatialBat], end: &'static str, wall_s: f64) -> Self {
         let p = &cfg.params;
         let l = &p.law;
         let cf = ClosedForm::of(p);
@@ -129,7 +190,7 @@ impl SpatialOutcome {
             l.target_radius_m * s,
             l.target_apex_m,
         ];
-        let last = run.bats.last();
+        let last = bats.last();
         let summary = SpatialSummary {
             scene: cfg.name.clone(),
             law: cfg.table.law,
@@ -144,22 +205,23 @@ impl SpatialOutcome {
             target_m: target,
             closed_form: cf,
             impacts_requested: cfg.table.impacts,
-            impacts: run.bats.len(),
-            end: end_name(run.end),
-            first_apex_m: run.bats.first().map(|b| b.apex_m),
+            impacts: bats.len(),
+            end,
+            first_apex_m: bats.first().map(|b| b.apex_m),
             final_apex_m: last.map(|b| b.apex_m),
             horizontal_apex_error_m: last.map(|b| horizontal_error(&b.apex_m, &target)),
             apex_height_rel_error: last
                 .zip(cf.fixed_point_apex_m)
                 .map(|(b, h)| (b.apex_m[2] - h) / h),
             converged_after_impacts: converged_after(
-                &run.bats,
+                bats,
                 &target,
                 l.target_radius_m,
                 cf.fixed_point_apex_m,
             ),
             sim_time_s: last.map_or(0.0, |b| b.time_s),
             wall_time_s: wall_s,
+            controller: None,
         };
         Self { summary }
     }
@@ -209,6 +271,9 @@ impl Outcome for SpatialOutcome {
                 )
             )
         );
+        if let Some(c) = &s.controller {
+            o += &c.text();
+        }
         o += &format!(
             "  time:         simulated {:.3} s, wall {:.3} ms\n",
             s.sim_time_s,
@@ -221,10 +286,21 @@ impl Outcome for SpatialOutcome {
         json_text(&self.summary, JsonStyle::Compact)
     }
 
-    /// A contact search at its cap, or a non-finite value, is not the juggler's physics.
+    fn attach_hil(&mut self, report: HilReport) {
+        if let Some(c) = self.summary.controller.as_mut() {
+            c.hil = Some(report);
+        }
+    }
+
+    fn safe_steps(&self) -> Option<&SafeSteps> {
+        self.summary.controller.as_ref().map(|c| &c.safe)
+    }
+
+    /// A contact search at its cap, a non-finite value, or the closed loop's step cap, is
+    /// not the juggler's physics.
     fn shortfall(&self) -> Option<String> {
         let s = &self.summary;
-        matches!(s.end, "search_cap" | "non_finite").then(|| {
+        matches!(s.end, "search_cap" | "non_finite" | "step_cap").then(|| {
             format!(
                 "after {} of {} bats: {}",
                 s.impacts, s.impacts_requested, s.end
