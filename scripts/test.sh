@@ -92,6 +92,7 @@ python3 scripts/layers.py
 step "lints (cargo clippy -D warnings), host crates and firmware"
 cargo clippy --all-targets -- -D warnings
 cargo clippy -p dexter-firmware -p dexter-mps2-an386 --target "$TARGET" -- -D warnings
+cargo clippy -p dexter-firmware -p dexter-mps2-an386 --target "$TARGET" --no-default-features --features spatial -- -D warnings
 cargo clippy -p dexter-nucleo-f446re --target "$TARGET" -- -D warnings
 cargo clippy -p dexter-nucleo-f446re --target "$TARGET" --features qemu-hsi -- -D warnings
 cargo clippy -p dexter-nucleo-f446re --target "$TARGET" --features qemu-hsi,calibrate -- -D warnings
@@ -100,12 +101,15 @@ step "the core builds for $TARGET with each math backend"
 cargo build -p dexter-core --target "$TARGET"
 cargo build -p dexter-core --target "$TARGET" --features fast-math
 
-step "the firmware images build for $TARGET (release): the arm image, then the default one"
+step "the firmware images build for $TARGET (release): the arm and spatial images, then the default one"
 # Each image is a cargo feature selection of hosted kinds (firmware/README.md, "Images").
 cargo build -p dexter-mps2-an386 --release --target "$TARGET" --no-default-features --features arm
 FW="target/$TARGET/release/dexter-mps2-an386"
 ARM_FW="target/$TARGET/release/dexter-mps2-an386-arm.elf"
 cp "$FW" "$ARM_FW"
+cargo build -p dexter-mps2-an386 --release --target "$TARGET" --no-default-features --features spatial
+SPATIAL_FW="target/$TARGET/release/dexter-mps2-an386-spatial.elf"
+cp "$FW" "$SPATIAL_FW"
 cargo build -p dexter-mps2-an386 --release --target "$TARGET"
 
 step "static worst-case control steps, from each image as flashed (scripts/wcet.py)"
@@ -117,6 +121,9 @@ python3 scripts/wcet.py "$ARM_FW" '<dexter_core::control::Controller as dexter_c
 # 416 = ArmController's 424-instruction budget less the 8 its HIL measurement window adds
 # (shared/src/arm_control.rs, STEP_INSTRUCTION_BUDGET)
 python3 scripts/wcet.py "$ARM_FW" '<dexter_core::arm_control::ArmController as dexter_core::fixed_rate::FixedRate>::step' --max-instructions 416
+# 1490 = SpatialController's 1500-instruction budget less its HIL measurement window
+# (shared/src/spatial_control/mod.rs, STEP_INSTRUCTION_BUDGET)
+python3 scripts/wcet.py "$SPATIAL_FW" '<dexter_core::spatial_control::SpatialController as dexter_core::fixed_rate::FixedRate>::step' --max-instructions 1490
 
 step "instructions per impact and per control step through the release CLI, under their ceilings (scripts/loop-cost.sh --check)"
 scripts/loop-cost.sh --check

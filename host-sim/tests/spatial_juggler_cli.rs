@@ -189,3 +189,122 @@ fn bad_values_exit_2_naming_the_key() {
         assert_eq!(dexter(&args).status.code(), Some(2), "{extra:?}");
     }
 }
+
+const SIL: &str = "spatial-juggler-sil";
+
+/// Issue 28: through the core's fixed-rate controller, with the realistic camera (0.5 mm
+/// noise, 5 ms latency), encoders and joint limits, the juggle converges: every apex after
+/// the tenth within 1 % of rho* horizontally and of h* in height, no safe-state step.
+#[test]
+fn the_closed_loop_with_a_realistic_camera_converges() {
+    let s = json(&["run", &scene(SIL)]);
+    assert_eq!(s["end"], "completed", "{s}");
+    let c = &s["controller"];
+    assert_eq!(c["runs_on"], "sil", "{s}");
+    assert_eq!(c["safe"]["safe_steps"], 0, "{s}");
+    let after = s["converged_after_impacts"].as_u64().expect("converged");
+    assert!(after <= 10, "{s}");
+    assert!(f(&s["horizontal_apex_error_m"]) < 5e-3, "{s}");
+    assert!(f(&s["apex_height_rel_error"]).abs() < 1e-2, "{s}");
+}
+
+/// With an exact camera and encoders, the closed loop meets the ideal law's own figure:
+/// below 1 mm horizontally and 0.1 % in height within 30 impacts.
+#[test]
+fn the_closed_loop_with_exact_sensors_meets_the_ideal_figure() {
+    let sets = [
+        "spatial_juggler.sil.camera_sigma_m=0",
+        "spatial_juggler.sil.camera_latency_s=0",
+        "spatial_juggler.sil.encoder_resolution_rad=0",
+    ];
+    let file = scene(SIL);
+    let mut args = vec!["run", &file as &str, "--impacts", "30"];
+    for s in &sets {
+        args.extend(["--set", s]);
+    }
+    let s = json(&args);
+    assert_eq!(s["end"], "completed", "{s}");
+    assert!(f(&s["horizontal_apex_error_m"]) < 1e-3, "{s}");
+    assert!(f(&s["apex_height_rel_error"]).abs() < 1e-3, "{s}");
+}
+
+/// Tests that can fail: a flipped radial or lateral gain, or the mirror term dropped
+/// (kappa0 = 0), and the closed loop loses the ball; without energy feedback (kappa1 = 0) it
+/// settles away from h*.
+#[test]
+fn a_flipped_gain_or_a_dropped_mirror_term_fails_the_closed_loop() {
+    for set in [
+        "spatial_juggler.kappa10=0.12",
+        "spatial_juggler.kappa11=0.08",
+        "spatial_juggler.kappa20_radpm=0.125",
+        "spatial_juggler.kappa21_radspm=0.0798",
+        "spatial_juggler.kappa0=0",
+        "spatial_juggler.kappa1_s2pm2=0",
+    ] {
+        let s = json(&["run", &scene(SIL), "--set", set]);
+        assert!(s["converged_after_impacts"].is_null(), "{set}: {s}");
+    }
+}
+
+/// Each impact of the closed loop happens on the paddle's plane: n(q) . b = 0 at the
+/// joints and ball the trace records, with n computed here from docs/spatial.md's
+/// kinematics (n = cos q3 n0 + sin q3 t, n0 = (-sin e cos q1, -sin e sin q1, cos e),
+/// t = (-sin q1, cos q1, 0), e = q2 + pi/2).
+#[test]
+fn every_closed_loop_impact_is_on_the_paddle() {
+    let dir = scratch("sj-sil-trace");
+    let trace = dir.join("bats.csv");
+    let t = trace.display().to_string();
+    ok(&["run", &scene(SIL), "--impacts", "20", "--trace", &t]);
+    let rows = common::csv_rows(&trace);
+    assert_eq!(rows.len(), 20);
+    for r in &rows {
+        let (q1, e, q3) = (
+            r["q1_rad"],
+            r["q2_rad"] + std::f64::consts::FRAC_PI_2,
+            r["q3_rad"],
+        );
+        let n0 = [-e.sin() * q1.cos(), -e.sin() * q1.sin(), e.cos()];
+        let tt = [-q1.sin(), q1.cos(), 0.0];
+        let n: Vec<f64> = (0..3)
+            .map(|i| q3.cos() * n0[i] + q3.sin() * tt[i])
+            .collect();
+        let gap = n[0] * r["x_m"] + n[1] * r["y_m"] + n[2] * r["z_m"];
+        assert!(gap.abs() < 1e-9, "gap {gap:e} at {r:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_closed_loop_values_exit_2_naming_the_key() {
+    let s = scene(SIL);
+    for (set, key) in [
+        ("spatial_juggler.sil.bogus=1", "bogus"),
+        (
+            "spatial_juggler.sil.control_rate_hz=0",
+            "spatial_juggler.sil.control_rate_hz",
+        ),
+        (
+            "spatial_juggler.sil.max_rad=[3.0, -3.0, 1.0]",
+            "spatial_juggler.sil.max_rad (q2)",
+        ),
+        (
+            "spatial_juggler.sil.home_rad=[0.0, 0.0, 0.0]",
+            "spatial_juggler.sil.home_rad (q2)",
+        ),
+        (
+            "spatial_juggler.sil.camera_sigma_m=-1",
+            "spatial_juggler.sil.camera_sigma_m",
+        ),
+        (
+            "spatial_juggler.sil.gain_velocity=3",
+            "spatial_juggler.sil.gain_velocity",
+        ),
+        ("spatial_juggler.law=modified", "spatial_juggler.law"),
+    ] {
+        let out = dexter(&["run", &s, "--set", set]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{set}: {err}");
+        assert!(err.contains(key), "{set}: {err}");
+    }
+}

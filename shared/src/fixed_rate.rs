@@ -3,7 +3,8 @@
 //! state with a fault code.
 //!
 //! Every controller the firmware hosts (the line juggler's [`Controller`], the link check,
-//! the tilt table, the hopper's thrust and the arm's trajectory tracker) implements
+//! the tilt table, the hopper's thrust, the arm's trajectory tracker and the spatial juggler's
+//! controller) implements
 //! [`FixedRate`], and its command type implements [`Reply`]. The simulator's SIL loop, the
 //! host's HIL driver and the firmware's server are written once against these two traits
 //! and [`Wire`] (how a controller's types travel on the link): a new controller needs its

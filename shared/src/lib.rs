@@ -30,6 +30,7 @@
 //! | [`tilt_control`] | the fixed-rate kappa-tilt [`TiltController`](tilt_control::TiltController): camera flight estimate, eq. 7 contact, eq. 25 table velocity, table tracking | Zumel & Erdmann eq. 2, 7, 21, 25 |
 //! | [`hop_control`] | the fixed-rate hopper thrust controller: phases from sampled leg compression, valve timing, safe state | Koditschek & Bühler 1991, sec. 3.1, eq. 8/10 |
 //! | [`arm_control`] | the one-joint arm's [`ArmController`](arm_control::ArmController): a planned B-spline tracked with PD plus feed-forward, as a joint torque within the motor's limit | Akella, Huang, Lynch & Mason, sec. 2 |
+//! | [`spatial_control`] | the spatial juggler's [`SpatialController`](spatial_control::SpatialController): a camera's ball positions and three encoders in, eq. 13 through a three-axis estimator with the paddle's restitution law, three joint trackers within their limits | Rizzi & Koditschek 1994, sec. 3.1.2, eq. 5, 13 |
 //! | [`protocol`] | the wire, in three layers: [`framing`](protocol::framing) (postcard + CRC + COBS, typed decode errors; no message, no controller), [`messages`](protocol::messages) (host and device messages, the partial decode of an image), [`kinds`](protocol::kinds) (the one file naming every controller kind: [`Kind`](protocol::Kind), [`Wire`](protocol::Wire)) | — |
 //!
 //! Imports go one way, down this table's layers: the laws and helpers; [`fixed_rate`] and

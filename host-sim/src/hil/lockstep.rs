@@ -132,7 +132,8 @@ impl<C: Wire> LockStep<C> {
             DeviceMessage::Rejected(Rejection::NotHosted(_)) => Err(link_err(format!(
                 "this firmware image does not host the {kind:?} controller: its cargo \
                  features select the hosted kinds (firmware/README.md, \"Images\"; the \
-                 arm's image: `--no-default-features --features arm`)"
+                 arm's image: `--no-default-features --features arm`, the spatial \
+                 juggler's: `--features spatial`)"
             ))),
             DeviceMessage::Rejected(Rejection::Undecodable(e)) => Err(link_err(format!(
                 "the firmware could not decode Configure for the {kind:?} controller ({e}): \

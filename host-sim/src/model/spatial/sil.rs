@@ -333,3 +333,102 @@ pub fn sil_controller(
 ) -> Result<Sil<SpatialController>, ControllerError> {
     Sil::<SpatialController>::new(params)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plant(ball: SpatialBall<f64>, joints: [f64; 3]) -> SilPlant {
+        SilPlant {
+            restitution: 0.7,
+            gravity_mps2: 9.81,
+            dt_s: 0.001,
+            camera: Camera {
+                sigma_m: 0.0,
+                latency_s: 0.0,
+                seed: 1,
+            },
+            resolution_rad: 0.0,
+            accel_max_radps2: [500.0; 3],
+            reach_m: 2.0,
+            half_width_m: 0.2,
+            ball,
+            joints_rad: joints,
+        }
+    }
+
+    /// Held (no acceleration) at `w` rad/s from `p.joints_rad`: the bats until `t_end`.
+    fn held(p: SilPlant, w: [f64; 3], t_end: f64) -> Vec<SpatialBat> {
+        let mut bats = Vec::new();
+        let mut on_bat = |b: &SpatialBat| bats.push(*b);
+        let mut plant = Plant {
+            p,
+            ball: p.ball,
+            joints: Joints { q: p.joints_rad, w },
+            accel: [0.0; 3],
+            refs: p.joints_rad,
+            t_s: 0.0,
+            camera: Sampled::with(
+                AtControlSteps::default(),
+                Measured::new([0.0; 3], [0.0; 3], 1),
+                Latency::new(0.0),
+            ),
+            encoders: Sampled::with(
+                AtControlSteps::default(),
+                Measured::new([0.0; 3], [0.0; 3], 1),
+                NoLatency::default(),
+            ),
+            impacts: 0,
+            want: 10,
+            worst_error: 0.0,
+            on_bat: &mut on_bat,
+        };
+        let steps = (t_end / p.dt_s).round() as u64;
+        for k in 0..steps {
+            let next = (k + 1) as f64 * p.dt_s;
+            if plant.advance(k, next).unwrap().is_break() {
+                break;
+            }
+        }
+        bats
+    }
+
+    /// A ball dropped from 0.3 m onto the paddle held level (q2 = -pi/2, normal up) meets it
+    /// at sqrt(2 h / g), inside a control period, and leaves at alpha times its speed.
+    #[test]
+    fn a_drop_on_the_level_paddle_meets_the_closed_form() {
+        let p = plant(
+            SpatialBall::new([1.0, 0.1, 0.3], [0.0; 3]),
+            [0.1, -core::f64::consts::FRAC_PI_2, 0.0],
+        );
+        let bats = held(p, [0.0; 3], 0.3);
+        assert_eq!(bats.len(), 1);
+        let t = (2.0 * 0.3 / 9.81f64).sqrt();
+        assert!((bats[0].time_s - t).abs() < 1e-12, "{} {t}", bats[0].time_s);
+        assert!(bats[0].before[2].abs() < 1e-12);
+        let v = 9.81 * t;
+        assert!((bats[0].after[5] - 0.7 * v).abs() < 1e-9);
+    }
+
+    /// The paddle swinging up at 1 rad/s about the shoulder meets a falling ball where the
+    /// rotating plane's gap is zero (computed here, not by the plant's root), and adds its
+    /// own speed at the contact, omega |b|, to the normal velocity: (1 + alpha) of it.
+    #[test]
+    fn a_swinging_paddle_meets_the_ball_on_its_plane_and_adds_its_speed() {
+        let e0 = -0.3;
+        let start = SpatialBall::new([1.0, 0.0, 0.2], [0.0; 3]);
+        let p = plant(start, [0.0, e0 - core::f64::consts::FRAC_PI_2, 0.0]);
+        let bats = held(p, [0.0, 1.0, 0.0], 0.5);
+        assert_eq!(bats.len(), 1);
+        let b = &bats[0];
+        let e = e0 + b.time_s;
+        // in the x-z plane the paddle is the line at elevation e: gap = z cos e - x sin e
+        let gap = b.before[2] * e.cos() - b.before[0] * e.sin();
+        assert!(gap.abs() < 1e-12, "{gap:e}");
+        let n = [-e.sin(), 0.0, e.cos()];
+        let r = b.before[0].hypot(b.before[2]);
+        let un = n[0] * b.before[3] + n[2] * b.before[5] - r; // paddle speed r omega along n
+        let after_n = n[0] * b.after[3] + n[2] * b.after[5] - r;
+        assert!((after_n + 0.7 * un).abs() < 1e-9, "{after_n} {un}");
+    }
+}

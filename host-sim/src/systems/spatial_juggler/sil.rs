@@ -116,6 +116,15 @@ fn param_error(e: ParamError) -> SceneError {
     if name.starts_with("kappa") || name.starts_with("target_") || name == "gravity_mps2" {
         return super::param_error(e);
     }
+    let reason = match (e, name) {
+        (ParamError::OutOfRange(_), n) if n.ends_with(".max_rad") => "must be above min_rad",
+        (ParamError::OutOfRange(_), n) if n.starts_with("home_rad.") => {
+            "must be within its joint's min_rad ..= max_rad"
+        }
+        (ParamError::OutOfRange(_), "estimator.gain_position") => "must be in (0, 1]",
+        (ParamError::OutOfRange(_), "estimator.gain_velocity") => "must be in (0, 2)",
+        _ => reason,
+    };
     SceneError::new(core_key(name), reason)
 }
 

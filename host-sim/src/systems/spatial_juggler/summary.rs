@@ -142,7 +142,10 @@ impl ControllerFigures {
             self.safe.safe_steps,
             self.safe.steps
         );
-        o += &self.safe.text();
+        let safe = self.safe.text();
+        if !safe.is_empty() {
+            o += &format!("  {safe}");
+        }
         if let Some(h) = &self.hil {
             o += &format!("  {}", h.text());
         }
