@@ -443,13 +443,8 @@ impl FixedRate for ArmController {
         if self.fault == Fault::None {
             self.fault = fault;
         }
-        let u = self.tracker.brake(&self.joint);
-        let dt = self.params.dt_s;
         let j = self.joint;
-        self.joint = PaddleState::new(
-            j.height_m + j.velocity_mps * dt + 0.5 * u * dt * dt,
-            j.velocity_mps + u * dt,
-        );
+        let u = self.tracker.brake_and_coast(&mut self.joint);
         ArmCommand {
             seq,
             torque_nm: self.torque_for(u, j.height_m),

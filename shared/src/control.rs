@@ -311,13 +311,7 @@ impl FixedRate for Controller {
     fn safe(&mut self, seq: u32, fault: Fault) -> ActuatorCommand {
         self.estimator.reset();
         self.estimate.valid = false;
-        let u = self.tracker.brake(&self.paddle);
-        // dead-reckon the paddle under our own braking command
-        let dt = self.params.dt_s;
-        self.paddle = PaddleState::new(
-            self.paddle.height_m + self.paddle.velocity_mps * dt + 0.5 * u * dt * dt,
-            self.paddle.velocity_mps + u * dt,
-        );
+        let u = self.tracker.brake_and_coast(&mut self.paddle);
         ActuatorCommand {
             seq,
             paddle_accel_mps2: u,

@@ -133,6 +133,20 @@ impl Tracker {
         (-paddle.velocity_mps * self.inv_dt_per_s).clamp_r(-a, a)
     }
 
+    /// [`Self::brake`], with `paddle` dead-reckoned one period under it: where the safe
+    /// state takes the paddle to be while its measurements are not trusted (every
+    /// controller's safe command).
+    #[inline]
+    pub fn brake_and_coast(&self, paddle: &mut PaddleState<f32>) -> f32 {
+        let u = self.brake(paddle);
+        let (dt, j) = (self.dt_s, *paddle);
+        *paddle = PaddleState::new(
+            j.height_m + j.velocity_mps * dt + 0.5 * u * dt * dt,
+            j.velocity_mps + u * dt,
+        );
+        u
+    }
+
     fn limit(&self, u: f32, paddle: &PaddleState<f32>) -> f32 {
         let l = &self.limits;
         let a = l.accel_max_mps2;

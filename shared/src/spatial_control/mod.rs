@@ -417,22 +417,15 @@ impl FixedRate for SpatialController {
     fn safe(&mut self, seq: u32, fault: Fault) -> SpatialCommand {
         self.estimator.reset();
         self.estimate.valid = false;
-        let dt = self.params.dt_s;
         let mut cmd = SpatialCommand {
             seq,
             mode: Mode::Safe,
             fault,
             ..SpatialCommand::default()
         };
-        for i in 0..3 {
-            let j = self.joints[i];
-            let u = self.trackers[i].brake(&j);
-            self.joints[i] = PaddleState::new(
-                j.height_m + j.velocity_mps * dt + 0.5 * u * dt * dt,
-                j.velocity_mps + u * dt,
-            );
-            cmd.accel_radps2[i] = u;
-            cmd.angle_ref_rad[i] = self.joints[i].height_m;
+        for (i, (t, j)) in self.trackers.iter().zip(&mut self.joints).enumerate() {
+            cmd.accel_radps2[i] = t.brake_and_coast(j);
+            cmd.angle_ref_rad[i] = j.height_m;
         }
         cmd
     }

@@ -160,3 +160,81 @@ proptest! {
         }
     }
 }
+
+/// With no feedback gains the command is the feed-forward alone: the second derivative of
+/// eq. 13's angles along the ball's flight, computed here by central differences of the
+/// angles (f64), not of the law's rates.
+#[test]
+fn with_no_feedback_the_command_is_the_references_acceleration_along_the_flight() {
+    let mut p = SpatialControlParams::default();
+    (p.kp_per_s2, p.kd_per_s) = (0.0, 0.0);
+    let mut c = SpatialController::new(p).unwrap();
+    let g = 9.81;
+    let start = SpatialBall::new([1.05f64, 0.06, 0.6], [-0.2, 0.1, 0.5]);
+    let dt = 0.001;
+    let mut last = SpatialCommand::default();
+    let steps = 150u32;
+    for k in 0..steps {
+        let b = start.flown(k as f64 * dt, g);
+        last = c.step(&frame(k + 1, b.position_m.map(|x| x as f32)));
+    }
+    assert_eq!(last.mode, Mode::Track);
+    let l64 = p.law;
+    let law = crate::spatial::SpatialMirrorLaw::new(crate::spatial::SpatialLawParams {
+        kappa0: l64.kappa0.into(),
+        kappa1_s2pm2: l64.kappa1_s2pm2.into(),
+        target_apex_m: l64.target_apex_m.into(),
+        kappa10: l64.kappa10.into(),
+        kappa11: l64.kappa11.into(),
+        kappa20_radpm: l64.kappa20_radpm.into(),
+        kappa21_radspm: l64.kappa21_radspm.into(),
+        target_radius_m: l64.target_radius_m.into(),
+        target_azimuth_rad: l64.target_azimuth_rad.into(),
+        gravity_mps2: l64.gravity_mps2.into(),
+    })
+    .unwrap();
+    let t = (steps - 1) as f64 * dt;
+    let h = 1e-3;
+    let angle = |s: f64| law.reference(&start.flown(s, g)).angles_rad;
+    let (a, b, m) = (angle(t + h), angle(t - h), angle(t));
+    for i in 0..3 {
+        let want = (a[i] - 2.0 * m[i] + b[i]) / (h * h);
+        let got = f64::from(last.accel_radps2[i]);
+        assert!(
+            (got - want).abs() < 0.02 * want.abs().max(1.0),
+            "joint {i}: {got} against {want}"
+        );
+    }
+    assert!(
+        f64::from(last.accel_radps2[1]).abs() > 0.1,
+        "a real acceleration"
+    );
+}
+
+/// A camera that delivers each position `latency_s` late: the estimate is the ball now,
+/// the delayed sample flown forward by the latency (checked against the true flight).
+#[test]
+fn the_estimate_is_the_ball_now_despite_the_cameras_latency() {
+    let mut p = SpatialControlParams::default();
+    p.estimator.latency_s = 0.01;
+    let mut c = SpatialController::new(p).unwrap();
+    let g = 9.81;
+    let start = SpatialBall::new([1.0f64, -0.05, 0.7], [0.1, 0.2, 0.3]);
+    let dt = 0.001;
+    for k in 0..200u32 {
+        let seen = start.flown(k as f64 * dt - 0.01, g);
+        c.step(&frame(k + 1, seen.position_m.map(|x| x as f32)));
+    }
+    let now = start.flown(199.0 * dt, g);
+    let est = c.estimate().ball;
+    for i in 0..3 {
+        assert!(
+            (f64::from(est.position_m[i]) - now.position_m[i]).abs() < 2e-4,
+            "axis {i}"
+        );
+        assert!(
+            (f64::from(est.velocity_mps[i]) - now.velocity_mps[i]).abs() < 1e-2,
+            "axis {i}"
+        );
+    }
+}
