@@ -308,3 +308,41 @@ fn bad_closed_loop_values_exit_2_naming_the_key() {
         assert!(err.contains(key), "{set}: {err}");
     }
 }
+
+/// Friction is an effect off by default: on, it changes the bats (the ball sticks to the
+/// paddle tangentially) and the juggle still converges, in both plants; negative, it is
+/// refused by name.
+#[test]
+fn friction_is_off_by_default_and_on_when_asked() {
+    for name in ["spatial-juggler", SIL] {
+        let file = scene(name);
+        let plain = json(&["run", &file]);
+        let zero = json(&[
+            "run",
+            &file,
+            "--set",
+            "spatial_juggler.friction_coefficient=0",
+        ]);
+        assert_eq!(plain["final_apex_m"], zero["final_apex_m"], "{name}");
+        let on = json(&[
+            "run",
+            &file,
+            "--set",
+            "spatial_juggler.friction_coefficient=0.3",
+        ]);
+        assert_ne!(plain["final_apex_m"], on["final_apex_m"], "{name}");
+        assert!(on["converged_after_impacts"].is_u64(), "{name}: {on}");
+        let out = dexter(&[
+            "run",
+            &file,
+            "--set",
+            "spatial_juggler.friction_coefficient=-1",
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("spatial_juggler.friction_coefficient"),
+            "{err}"
+        );
+    }
+}

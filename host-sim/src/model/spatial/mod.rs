@@ -19,7 +19,7 @@
 //!   a quadratic in t ([`ModifiedSpatialLaw::impact_time_s`]).
 //!
 //! Both searches start at the flight's apex. The paddle is much heavier than the ball and
-//! frictionless: with normal n and the paddle's velocity v_p at the ball (from the law's
+//! frictionless unless the scene sets friction ([`friction`], an effect off by default): with normal n and the paddle's velocity v_p at the ball (from the law's
 //! joint rates, perfect tracking), `b'+ = b' - (1 + alpha) (n . (b' - v_p)) n`.
 //!
 //! # Gains that converge
@@ -38,6 +38,7 @@ use dexter_core::spatial::{ModifiedSpatialLaw, SpatialBall, SpatialLawParams, Sp
 use serde::{Deserialize, Serialize};
 
 pub mod analysis;
+pub mod friction;
 pub mod sil;
 
 /// Most impacts of one run.
@@ -143,6 +144,8 @@ pub struct SpatialJuggler {
     law: SpatialLaw,
     restitution: f64,
     gravity_mps2: f64,
+    /// Coulomb friction at the bats ([`friction`]); `None`: off, no code runs.
+    friction: Option<f64>,
 }
 
 /// One bat.
@@ -224,6 +227,16 @@ impl SpatialJuggler {
             law,
             restitution,
             gravity_mps2: positive("gravity_mps2", gravity_mps2)?,
+            friction: None,
+        })
+    }
+
+    /// The same juggler with Coulomb friction of coefficient `mu` at the bats (0: off).
+    pub fn with_friction(self, mu: f64) -> Result<Self, ParamError> {
+        let mu = dexter_core::params::non_negative("friction_coefficient", mu)?;
+        Ok(Self {
+            friction: (mu > 0.0).then_some(mu),
+            ..self
         })
     }
 
@@ -279,6 +292,10 @@ impl SpatialJuggler {
         let mut after = *before;
         for (v, n) in after.velocity_mps.iter_mut().zip(n) {
             *v -= j * n;
+        }
+        if let Some(mu) = self.friction {
+            let (b, a) = (&before.velocity_mps, &mut after.velocity_mps);
+            friction::add_friction(mu, &n, b, &v_p, self.restitution, a);
         }
         Ok((after, [r.angles_rad, r.rates_radps]))
     }

@@ -17,7 +17,8 @@
 //!   on |b| and |b'| over the period. A crossing off the blade is no contact (the ball
 //!   passes the plane beside the paddle); at most one impact per period (the ball leaves at
 //!   (1 + alpha) times its closing speed).
-//! - **Impact:** frictionless, the paddle much heavier than the ball:
+//! - **Impact:** frictionless unless friction is on ([`super::friction`]), the paddle much
+//!   heavier than the ball:
 //!   `b'+ = b' - (1 + alpha) (n . (b' - omega x b)) n` ([`PaddleFrame::bounce`]).
 //! - **Camera:** the ball's position at every control step with Gaussian noise per axis,
 //!   delivered `latency_s` later ([`crate::effects::sensor`]); **encoders:** the joint
@@ -68,6 +69,8 @@ pub struct SilPlant {
     pub reach_m: f64,
     /// Half the blade's width across the bar, m.
     pub half_width_m: f64,
+    /// Coulomb friction at the bats ([`super::friction`]); `None`: off.
+    pub friction: Option<f64>,
     /// The ball at t = 0.
     pub ball: SpatialBall<f64>,
     /// The joint angles at t = 0, rad (at rest).
@@ -196,8 +199,13 @@ impl Plant<'_> {
         };
         let before = self.ball;
         self.ball.velocity_mps = v;
+        if let Some(mu) = self.p.friction {
+            let v_p = pf.velocity_at_mps(&before.position_m);
+            let (b, a) = (&before.velocity_mps, &mut self.ball.velocity_mps);
+            super::friction::add_friction(mu, &pf.normal, b, &v_p, self.p.restitution, a);
+        }
         let g = self.p.gravity_mps2;
-        let top = self.ball.flown((v[2] / g).max(0.0), g);
+        let top = self.ball.flown((self.ball.velocity_mps[2] / g).max(0.0), g);
         let err = (0..3).map(|i| (self.refs[i] - self.joints.q[i]).abs());
         self.worst_error = err.fold(self.worst_error, f64::max);
         let state = |b: &SpatialBall<f64>| {
@@ -352,6 +360,7 @@ mod tests {
             accel_max_radps2: [500.0; 3],
             reach_m: 2.0,
             half_width_m: 0.2,
+            friction: None,
             ball,
             joints_rad: joints,
         }

@@ -86,6 +86,8 @@ pub struct SpatialTable {
     pub initial_velocity_mps: [f64; 3],
     /// `impacts`: bats to simulate, 1 ..= [`MAX_BATS`].
     pub impacts: usize,
+    /// `friction_coefficient`: Coulomb friction at the bats, >= 0 (0: off, the default).
+    pub friction_coefficient: f64,
     /// `[spatial_juggler.sil]`: run through the fixed-rate controller (camera, encoders,
     /// joint limits) instead of perfect tracking.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -111,6 +113,7 @@ impl Default for SpatialTable {
             initial_position_m: [1.06, 0.08, 0.6],
             initial_velocity_mps: [0.0; 3],
             impacts: 40,
+            friction_coefficient: 0.0,
             sil: None,
         }
     }
@@ -258,6 +261,9 @@ impl SpatialTable {
         self.defaults_fit()?;
         let params = self.params();
         let juggler = params.juggler(self.law).map_err(param_error)?;
+        let juggler = juggler
+            .with_friction(self.friction_coefficient)
+            .map_err(param_error)?;
         if !(1..=MAX_BATS).contains(&self.impacts) {
             return Err(SceneError::new(
                 "spatial_juggler.impacts",

@@ -232,6 +232,7 @@ impl SilTable {
             accel_max_radps2: self.accel_max_radps2,
             reach_m: self.reach_m,
             half_width_m: self.half_width_m,
+            friction: (table.friction_coefficient > 0.0).then_some(table.friction_coefficient),
             ball: start,
             joints_rad: self.home_rad,
         })
