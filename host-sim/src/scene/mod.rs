@@ -37,6 +37,25 @@ impl SceneError {
     pub fn whole(reason: impl fmt::Display) -> Self {
         Self::new("", reason.to_string())
     }
+
+    /// A core parameter error under its scene key: `key` maps the core's parameter name to
+    /// the key, `docs` is the page that gives the allowed ranges. An error without a
+    /// parameter name is reported as a whole.
+    pub fn of_param(
+        e: dexter_core::params::ParamError,
+        docs: &str,
+        key: impl FnOnce(&'static str) -> String,
+    ) -> Self {
+        use dexter_core::params::ParamError as P;
+        let (name, reason) = match e {
+            P::NotFinite(n) => (n, "must be a finite number".to_string()),
+            P::NotPositive(n) => (n, "must be > 0".into()),
+            P::Negative(n) => (n, "must be >= 0".into()),
+            P::OutOfRange(n) => (n, format!("is out of its allowed range ({docs})")),
+            other => return Self::whole(other),
+        };
+        Self::new(key(name), reason)
+    }
 }
 
 impl fmt::Display for SceneError {

@@ -150,24 +150,14 @@ pub struct JugglerConfig {
 
 /// A core parameter error with its `[planar_juggler]` key.
 fn param_error(e: ParamError) -> SceneError {
-    let name = match e {
-        ParamError::NotFinite(n)
-        | ParamError::NotPositive(n)
-        | ParamError::Negative(n)
-        | ParamError::OutOfRange(n) => n,
-        _ => return SceneError::whole(e),
-    };
-    let key = match name {
-        "kappa1" => "kappa1_s2pm2",
-        n => n,
-    };
-    let reason = match e {
-        ParamError::NotFinite(_) => "must be a finite number",
-        ParamError::NotPositive(_) => "must be > 0",
-        ParamError::Negative(_) => "must be >= 0",
-        _ => "is out of its allowed range (docs/planar.md)",
-    };
-    SceneError::new(format!("planar_juggler.{key}"), reason)
+    SceneError::of_param(e, "docs/planar.md", |name| {
+        let key = if name == "kappa1" {
+            "kappa1_s2pm2"
+        } else {
+            name
+        };
+        format!("planar_juggler.{key}")
+    })
 }
 
 impl JugglerTable {

@@ -149,26 +149,15 @@ pub struct SpatialConfig {
 
 /// A core parameter error with its `[spatial_juggler]` key.
 pub(crate) fn param_error(e: ParamError) -> SceneError {
-    let name = match e {
-        ParamError::NotFinite(n)
-        | ParamError::NotPositive(n)
-        | ParamError::Negative(n)
-        | ParamError::OutOfRange(n) => n,
-        _ => return SceneError::whole(e),
-    };
-    let key = match name {
-        "kappa1" => "kappa1_s2pm2",
-        "kappa20" => "kappa20_radpm",
-        "kappa21" => "kappa21_radspm",
-        n => n,
-    };
-    let reason = match e {
-        ParamError::NotFinite(_) => "must be a finite number",
-        ParamError::NotPositive(_) => "must be > 0",
-        ParamError::Negative(_) => "must be >= 0",
-        _ => "is out of its allowed range (docs/spatial.md)",
-    };
-    SceneError::new(format!("spatial_juggler.{key}"), reason)
+    SceneError::of_param(e, "docs/spatial.md", |name| {
+        let key = match name {
+            "kappa1" => "kappa1_s2pm2",
+            "kappa20" => "kappa20_radpm",
+            "kappa21" => "kappa21_radspm",
+            n => n,
+        };
+        format!("spatial_juggler.{key}")
+    })
 }
 
 impl SpatialTable {

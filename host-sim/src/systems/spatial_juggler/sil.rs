@@ -104,28 +104,32 @@ fn core_key(field: &str) -> String {
     format!("spatial_juggler.sil.{key}")
 }
 
-/// A core controller's parameter error with its scene key.
+/// A core controller's parameter error with its scene key: the law's under
+/// `[spatial_juggler]`, the rest under `[spatial_juggler.sil]`.
 fn param_error(e: ParamError) -> SceneError {
-    let (name, reason) = match e {
-        ParamError::NotFinite(n) => (n, "must be a finite number (and below 3.4e38: an f32)"),
-        ParamError::NotPositive(n) => (n, "must be > 0"),
-        ParamError::Negative(n) => (n, "must be >= 0"),
-        ParamError::OutOfRange(n) => (n, "is out of its allowed range (docs/spatial.md)"),
+    let name = match e {
+        ParamError::NotFinite(n)
+        | ParamError::NotPositive(n)
+        | ParamError::Negative(n)
+        | ParamError::OutOfRange(n) => n,
         other => return SceneError::whole(other),
     };
     if name.starts_with("kappa") || name.starts_with("target_") || name == "gravity_mps2" {
         return super::param_error(e);
     }
-    let reason = match (e, name) {
+    let mut err = SceneError::of_param(e, "docs/spatial.md", core_key);
+    let specific = match (e, name) {
+        (ParamError::NotFinite(_), _) => "must be a finite number (and below 3.4e38: an f32)",
         (ParamError::OutOfRange(_), n) if n.ends_with(".max_rad") => "must be above min_rad",
         (ParamError::OutOfRange(_), n) if n.starts_with("home_rad.") => {
             "must be within its joint's min_rad ..= max_rad"
         }
         (ParamError::OutOfRange(_), "estimator.gain_position") => "must be in (0, 1]",
         (ParamError::OutOfRange(_), "estimator.gain_velocity") => "must be in (0, 2)",
-        _ => reason,
+        _ => return err,
     };
-    SceneError::new(core_key(name), reason)
+    err.reason = specific.into();
+    err
 }
 
 impl SilTable {
