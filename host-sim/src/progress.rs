@@ -5,6 +5,8 @@
 //! - [`Progress`]: a run's progress towards whichever of its limits it reaches first
 //!   (impacts, simulated seconds, cycles), revealed only once the run has taken
 //!   [`REVEAL_AFTER`]: a short run draws nothing, a long one always shows where it is.
+//!   `DEXTER_PROGRESS_REVEAL_MS` (milliseconds) sets that delay instead, so that a test of
+//!   the bar does not depend on how fast the machine runs the scene.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -12,6 +14,14 @@ use std::time::{Duration, Instant};
 
 /// How long a run goes before its [`Progress`] bar appears.
 pub const REVEAL_AFTER: Duration = Duration::from_millis(500);
+
+/// [`REVEAL_AFTER`], or `DEXTER_PROGRESS_REVEAL_MS` if it is set to a whole number.
+fn reveal_after() -> Duration {
+    std::env::var("DEXTER_PROGRESS_REVEAL_MS")
+        .ok()
+        .and_then(|ms| ms.parse().ok())
+        .map_or(REVEAL_AFTER, Duration::from_millis)
+}
 
 /// Steps of a [`Progress`] bar (per mille of the run).
 const STEPS: u64 = 1000;
@@ -37,6 +47,8 @@ pub struct Progress {
     limits: Vec<(f64, &'static str)>,
     bar: ProgressBar,
     start: Instant,
+    /// How long before the bar appears.
+    reveal_after: Duration,
     /// Shown on a terminal once the run takes a while.
     wanted: bool,
     shown: bool,
@@ -52,6 +64,7 @@ impl Progress {
             limits: limits.to_vec(),
             bar,
             start: Instant::now(),
+            reveal_after: reveal_after(),
             wanted: wanted && std::io::stderr().is_terminal(),
             shown: false,
         }
@@ -74,7 +87,7 @@ impl Progress {
         if !self.wanted {
             return;
         }
-        if !self.shown && self.start.elapsed() >= REVEAL_AFTER {
+        if !self.shown && self.start.elapsed() >= self.reveal_after {
             self.bar.set_draw_target(ProgressDrawTarget::stderr());
             self.shown = true;
         }
