@@ -16,6 +16,10 @@ use std::fmt::Write as _;
 struct SpatialReport {
     scene: String,
     law: crate::model::spatial::Law,
+    /// The scene closes its loop through the fixed-rate controller: the map analyzed is the
+    /// law's with perfect tracking, not the closed loop's (omitted from the JSON if not).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    perfect_tracking_of_a_closed_loop_scene: bool,
     #[serde(flatten)]
     analysis: SpatialAnalysis,
 }
@@ -38,6 +42,9 @@ impl Report for SpatialReport {
             self.scene,
             self.law.name()
         );
+        if self.perfect_tracking_of_a_closed_loop_scene {
+            o += "  note:         the law's map with perfect tracking, not the closed loop of [spatial_juggler.sil] (its camera, estimator and joint tracking are not linearized)\n";
+        }
         let fp: Vec<String> = a.fixed_point.iter().map(|x| format!("{x:.6}")).collect();
         let _ = writeln!(
             o,
@@ -113,6 +120,7 @@ impl Analyzes for SpatialJugglerSystem {
         Ok(Box::new(SpatialReport {
             scene: cfg.name.clone(),
             law: cfg.table.law,
+            perfect_tracking_of_a_closed_loop_scene: cfg.sil.is_some(),
             analysis,
         }))
     }
