@@ -301,6 +301,10 @@ fn bad_closed_loop_values_exit_2_naming_the_key() {
             "spatial_juggler.sil.gain_velocity",
         ),
         ("spatial_juggler.law=modified", "spatial_juggler.law"),
+        (
+            "spatial_juggler.sil.camera_latency_s=10",
+            "spatial_juggler.sil.camera_latency_s",
+        ),
     ] {
         let out = dexter(&["run", &s, "--set", set]);
         let err = String::from_utf8_lossy(&out.stderr);

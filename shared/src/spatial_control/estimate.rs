@@ -117,7 +117,7 @@ impl SpatialEstimator {
     /// The ballistic flight over one period and the restitution law at a crossing.
     fn predict(&mut self, paddle: &PaddleFrame<f32>) -> SpatialBall<f32> {
         let mut pred = self.ball.flown(self.dt_s, self.gravity_mps2);
-        let gap = paddle.gap_m(&pred.position_m);
+        let mut gap = paddle.gap_m(&pred.position_m);
         if self.last_gap_m > 0.0 && gap <= 0.0 {
             if let Some(v) = paddle.bounce(&pred, self.params.restitution) {
                 pred.velocity_mps = v;
@@ -125,9 +125,10 @@ impl SpatialEstimator {
                 for (p, n) in pred.position_m.iter_mut().zip(paddle.normal) {
                     *p -= back * n;
                 }
+                gap = paddle.gap_m(&pred.position_m);
             }
         }
-        self.last_gap_m = paddle.gap_m(&pred.position_m);
+        self.last_gap_m = gap;
         pred
     }
 

@@ -4,6 +4,7 @@
 //! and default: `docs/spatial.md`, "Closed loop".
 
 use super::SpatialTable;
+use crate::effects::sensor::MAX_PENDING;
 use crate::model::spatial::sil::{Camera, SilPlant};
 use crate::model::spatial::Law;
 use crate::scene::SceneError;
@@ -210,6 +211,15 @@ impl SilTable {
                     format!("must be finite and >= 0, got {v}"),
                 ));
             }
+        }
+        let in_flight = self.camera_latency_s * self.control_rate_hz;
+        if in_flight > MAX_PENDING as f64 {
+            return Err(SceneError::new(
+                "spatial_juggler.sil.camera_latency_s",
+                format!(
+                    "x control_rate_hz is {in_flight} samples in flight, more than the {MAX_PENDING} the camera holds"
+                ),
+            ));
         }
         for (k, v) in [
             ("reach_m", self.reach_m),
