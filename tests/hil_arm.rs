@@ -22,7 +22,6 @@ use dexter_sim::model::arm::simulate::Executed;
 use dexter_sim::model::arm::ArmScene;
 use dexter_sim::systems::arm::examples;
 use std::path::PathBuf;
-use std::sync::OnceLock;
 use std::time::Duration;
 
 /// The arm controller's own budget.
@@ -31,10 +30,7 @@ const BUDGET: u32 = <ArmController as FixedRate>::STEP_INSTRUCTION_BUDGET;
 /// The arm image (`--no-default-features --features arm`: line, echo and arm; the default
 /// image hosts the tilt table and the hopper instead, firmware/README.md, "Images").
 fn firmware() -> PathBuf {
-    static ELF: OnceLock<Result<PathBuf, String>> = OnceLock::new();
-    ELF.get_or_init(|| hil::build_firmware_image("arm", &["arm"]).map_err(|e| e.to_string()))
-        .clone()
-        .unwrap_or_else(|e| panic!("HIL tests need the firmware: {e}"))
+    dexter_tests::hosted_image("arm")
 }
 
 fn options(corrupt_rate: f64) -> HilOptions {

@@ -8,7 +8,7 @@
 use dexter_core::arm_control::ArmController;
 use dexter_core::fixed_rate::FixedRate;
 use dexter_sim::controller::StepController;
-use dexter_sim::hil::{self, HilOptions, LinkKind, LockStep};
+use dexter_sim::hil::{HilOptions, LinkKind, LockStep};
 use dexter_sim::model::arm::closed_loop::{track, track_sil, TrackedMotion};
 use dexter_sim::model::arm::params::ArmConfig;
 use dexter_sim::model::arm::planner::plan;
@@ -27,8 +27,7 @@ fn bits(m: &TrackedMotion) -> (Vec<(u64, u64)>, Vec<u64>) {
 
 #[test]
 fn the_throw_and_catch_tracked_on_the_target_equals_sil_bit_for_bit_within_budget() {
-    let elf = hil::build_firmware_image("arm", &["arm"])
-        .unwrap_or_else(|e| panic!("HIL tests need the firmware: {e}"));
+    let elf = dexter_tests::hosted_image("arm");
     let scene = ArmConfig::from_toml_str(examples::THROW_CATCH)
         .and_then(|c| c.validate())
         .expect("the shipped scene");

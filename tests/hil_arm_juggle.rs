@@ -7,7 +7,7 @@
 use dexter_core::arm_control::ArmController;
 use dexter_core::fixed_rate::FixedRate;
 use dexter_sim::controller::{Sil, StepController};
-use dexter_sim::hil::{self, HilOptions, LinkKind, LockStep};
+use dexter_sim::hil::{HilOptions, LinkKind, LockStep};
 use dexter_sim::model::arm::closed_loop::TrackedMotion;
 use dexter_sim::model::arm::juggle::juggle;
 use dexter_sim::model::arm::params::ArmConfig;
@@ -27,8 +27,7 @@ fn bits(m: &TrackedMotion) -> (Vec<(u64, u64)>, Vec<u64>) {
 
 #[test]
 fn the_juggle_tracked_on_the_target_equals_sil_cycle_by_cycle_bit_for_bit() {
-    let elf = hil::build_firmware_image("arm", &["arm"])
-        .unwrap_or_else(|e| panic!("HIL tests need the firmware: {e}"));
+    let elf = dexter_tests::hosted_image("arm");
     let cfg = ArmConfig::from_toml_str(examples::JUGGLE).expect("the shipped scene");
     let scene = cfg.validate().expect("the shipped scene");
     let p = plan(&scene).expect("the shipped scene plans");

@@ -12,12 +12,11 @@
 
 use dexter_core::fixed_rate::FixedRate;
 use dexter_core::spatial_control::SpatialController;
-use dexter_sim::hil::{self, HilOptions, LinkKind, LockStep};
+use dexter_sim::hil::{HilOptions, LinkKind, LockStep};
 use dexter_sim::model::spatial::sil::{self, SilEnd};
 use dexter_sim::model::spatial::SpatialBat;
 use dexter_sim::systems::spatial_juggler::{SpatialConfig, SpatialTable};
 use std::path::PathBuf;
-use std::sync::OnceLock;
 use std::time::Duration;
 
 /// The controller's own budget.
@@ -25,12 +24,7 @@ const BUDGET: u32 = <SpatialController as FixedRate>::STEP_INSTRUCTION_BUDGET;
 
 /// The spatial image (line, echo and the spatial juggler).
 fn firmware() -> PathBuf {
-    static ELF: OnceLock<Result<PathBuf, String>> = OnceLock::new();
-    ELF.get_or_init(|| {
-        hil::build_firmware_image("spatial", &["spatial"]).map_err(|e| e.to_string())
-    })
-    .clone()
-    .unwrap_or_else(|e| panic!("HIL tests need the firmware: {e}"))
+    dexter_tests::hosted_image("spatial")
 }
 
 fn options(corrupt_rate: f64) -> HilOptions {

@@ -79,3 +79,23 @@ pub fn static_worst_case(elf: &Path, symbol: &str) -> (u32, u32) {
     };
     (field("\"worst_instructions\""), field("\"worst_cycles\""))
 }
+
+/// The QEMU board's image that hosts `feature`'s controller besides the line juggler and
+/// the link check (`--no-default-features --features <feature>`, copied to
+/// `dexter-mps2-an386-<feature>.elf`; firmware/README.md, "Images"), built once per test
+/// binary. A test that cannot build it fails saying what to install.
+pub fn hosted_image(feature: &'static str) -> PathBuf {
+    type Built = Vec<(&'static str, Result<PathBuf, String>)>;
+    static BUILT: std::sync::Mutex<Built> = std::sync::Mutex::new(Vec::new());
+    let mut built = BUILT.lock().unwrap_or_else(|e| e.into_inner());
+    let result = match built.iter().find(|(f, _)| *f == feature) {
+        Some((_, r)) => r.clone(),
+        None => {
+            let r = dexter_sim::hil::build_firmware_image(feature, &[feature])
+                .map_err(|e| e.to_string());
+            built.push((feature, r.clone()));
+            r
+        }
+    };
+    result.unwrap_or_else(|e| panic!("HIL tests need the firmware: {e}"))
+}
