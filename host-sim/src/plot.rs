@@ -21,8 +21,6 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use image::codecs::png::PngEncoder;
-use image::{ColorType, ImageEncoder};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -510,6 +508,25 @@ fn backend_error(path: &Path, message: impl fmt::Display) -> PlotError {
     }
 }
 
+/// Encodes a `w` x `h` 8-bit RGB buffer as PNG into `out`, with the settings
+/// `image::codecs::png::PngEncoder::new` used (fast compression, adaptive filtering
+/// starting from Sub), so the files are byte for byte the ones written before `image` was
+/// dropped.
+fn write_png(
+    out: impl std::io::Write,
+    rgb: &[u8],
+    w: u32,
+    h: u32,
+) -> Result<(), png::EncodingError> {
+    let mut encoder = png::Encoder::new(out, w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    encoder.set_filter(png::FilterType::Sub);
+    encoder.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
+    encoder.write_header()?.write_image_data(rgb)
+}
+
 /// Draws `fig` into `{dir}/{stem}.svg` and `{dir}/{stem}.png`, each written whole or not at
 /// all ([`crate::output::AtomicFile`]).
 pub(crate) fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
@@ -545,9 +562,7 @@ pub(crate) fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Result<Vec<Pa
     }
     crate::output::write_atomic(&svg_path, svg.as_bytes()).map_err(io)?;
     let mut png = crate::output::AtomicFile::create(&png_path).map_err(io)?;
-    PngEncoder::new(png.writer())
-        .write_image(&rgb, w, h, ColorType::Rgb8)
-        .map_err(|e| backend_error(&png_path, e))?;
+    write_png(png.writer(), &rgb, w, h).map_err(|e| backend_error(&png_path, e))?;
     png.commit().map_err(io)?;
     Ok(vec![svg_path, png_path])
 }
