@@ -47,7 +47,7 @@
 //! Otherwise it is held for round(delta/dt) periods from the opening. With the prediction
 //! both ends of the thrust are then within half a period of the exact law's. After a late
 //! detection (`predict_bottom` off, or noise) ending at the estimate shortens the thrust,
-//! and measured on the tuned linear model at 1 kHz (`host-sim/tests/hopper_sampled.rs`)
+//! and measured on the tuned linear model at 1 kHz (`host-sim/tests/integration/hopper_sampled.rs`)
 //! that is the worse choice: the impulse lost at the late start is not recovered, while a
 //! thrust shifted whole only feels the small change of the spring force it replaces.
 //!

@@ -175,7 +175,7 @@ pub struct TiltParams {
     /// errors of 1e-3 rad rms (what a camera with 5 mrad noise gives at 500 Hz) tip the body
     /// within tens of impacts. A small kappa_w > 0 adds damping (the tilt oscillation turns
     /// by about 72 degrees per impact, so a term in theta' acts as a phase lead); measured
-    /// in `host-sim/tests/planar_real_table.rs`. Not in the paper.
+    /// in `host-sim/tests/integration/planar_real_table.rs`. Not in the paper.
     pub kappa_rate_s: f32,
     /// kappa_x of an added horizontal regulation term on the centre of mass's x at the
     /// impact, alpha = kappa theta + kappa_w theta' - kappa_x x - kappa_x' x', rad/m, in
@@ -196,7 +196,7 @@ pub struct TiltParams {
     /// sign drives x' away and tips the body within tens of impacts (measured). Gains must
     /// stay small against the tilt mode: on the sec. 2.3 triangle kappa_x 0.002 /m and
     /// kappa_x' 0.005 s/m keep x within 0.5 m over 300 impacts, 0.005 and 0.02 tip it
-    /// (`host-sim/tests/planar_real_table.rs`).
+    /// (`host-sim/tests/integration/planar_real_table.rs`).
     pub kappa_x_pm: f32,
     /// kappa_x' of the same term on x', s/m, in [0, 1]: the regulation's damping (see
     /// [`TiltParams::kappa_x_pm`]). Not in the paper.

@@ -31,7 +31,7 @@
 //!
 //! Every loop is capped ([`MAX_ADVANCE_STEPS`], [`MAX_BRACKET_DOUBLINGS`],
 //! [`MAX_BISECTIONS`]); hitting a cap is an error, never a silent miss. The test
-//! `first_contact_is_never_missed` in `tests/planar.rs` checks the result against a
+//! `first_contact_is_never_missed` in `tests/integration/planar.rs` checks the result against a
 //! brute-force search on a fine grid, grazing cases included.
 
 /// Most conservative-advancement steps per contact search.

@@ -76,11 +76,11 @@ pub const MAX_IMPACTS_PER_STEP: usize = 64;
 /// Most step samples a run keeps.
 pub const MAX_SAMPLES: usize = 200_000;
 /// The tilt-rate damping [`RealTable::realistic`] uses, s (measured in
-/// `tests/planar_real_table.rs`: 0.005 to 0.02 s all keep the triangle up with the
+/// `tests/integration/planar_real_table.rs`: 0.005 to 0.02 s all keep the triangle up with the
 /// realistic camera).
 pub const REALISTIC_KAPPA_RATE_S: f32 = 0.01;
 /// The horizontal regulation [`RealTable::realistic`] uses: kappa_x, rad/m, and kappa_x',
-/// s/m (`TiltParams::kappa_x_pm`; measured in `tests/planar_real_table.rs`).
+/// s/m (`TiltParams::kappa_x_pm`; measured in `tests/integration/planar_real_table.rs`).
 pub const REALISTIC_KAPPA_X: (f32, f32) = (0.002, 0.005);
 /// The x range of [`RealTable::realistic`], m: 2 m of stage travel and table (the
 /// sec. 2.3 start, theta0 = 0.3 rad, throws the body up to 0.5 m sideways in its first

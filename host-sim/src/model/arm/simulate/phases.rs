@@ -23,7 +23,7 @@ const TABLE_TOLERANCE_M: f64 = 1e-3;
 /// the 9 rad/s of the shipped scene's tracked catch), and the rigid sequence of a vertex
 /// strike and an edge impact does not tend to the edge's strike as a whole as the tilt
 /// goes to 0 (a square dropped flat then rocks, where the whole edge stops it outright;
-/// `tests/arm_impact.rs`): the rigid model does not resolve the order of nearly
+/// `tests/integration/arm_impact.rs`): the rigid model does not resolve the order of nearly
 /// simultaneous impacts, and the edge impact is taken for them.
 pub const FLAT_TOL_RAD: f64 = 0.02;
 

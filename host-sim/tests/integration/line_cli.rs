@@ -4,7 +4,7 @@
 //! a controller in its safe state is reported (and a run mostly in it fails), and every
 //! summary says which limit ended the run.
 
-mod common;
+use crate::common;
 
 use common::{dexter, json, scene};
 use serde_json::Value;

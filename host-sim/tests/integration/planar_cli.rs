@@ -2,10 +2,10 @@
 //! (`dexter_core::tilt`), `run` on the triangle with and without timing noise and with
 //! friction, a small `sweep` against the library's `classify`, plots, and named errors.
 
+use crate::common;
 use dexter_core::tilt::{kappa_crit, tilt_eigenvalues};
 use dexter_sim::model::planar::stats::classify;
 use dexter_sim::model::planar::PlanarParams;
-mod common;
 
 use common::dexter;
 use serde_json::Value;

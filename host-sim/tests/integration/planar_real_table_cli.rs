@@ -7,7 +7,7 @@
 //! table's 16 of 20 seeds of docs/planar.md. The HIL test builds the firmware first; it
 //! needs `qemu-system-arm` and the `thumbv7em-none-eabihf` target.
 
-mod common;
+use crate::common;
 
 use common::{dexter, firmware, json, ok, scene, scratch};
 use serde_json::Value;

@@ -1,7 +1,7 @@
 //! No NaN or inf in any summary, JSON or CSV: a statistic with no samples says "none" (JSON
 //! null), and a run that diverges ends as `diverged` and exits 1 (issue 22, finding 7).
 
-mod common;
+use crate::common;
 
 use common::{dexter, scene, scratch};
 

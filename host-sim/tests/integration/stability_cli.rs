@@ -2,7 +2,7 @@
 //! juggler (eq. 8/9) and the simplified nonlinear hopper (eq. 15/18/19), with verdicts
 //! checked against closed forms and against the simulator's own event-driven runs.
 
-mod common;
+use crate::common;
 
 use common::{dexter, json, scene};
 use serde_json::Value;

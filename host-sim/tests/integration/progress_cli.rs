@@ -3,7 +3,7 @@
 //! move with simulated time. Run under `script(1)` (util-linux), which gives the binary a
 //! terminal for stderr.
 
-mod common;
+use crate::common;
 
 use common::{scene, scratch};
 use std::process::{Command, Stdio};

@@ -6,7 +6,7 @@
 //! acceleration), and a cycle's landing error must stay inside the goal tolerance and not
 //! grow from the first cycles to the last.
 
-mod common;
+use crate::common;
 
 use common::{ok, scene, scratch};
 use serde_json::Value;

@@ -5,7 +5,7 @@
 //! nothing; bad `--shard` values and bad shard sets are refused (exit 2) naming them.
 //! `tests/slurm.rs` runs the same through a real SLURM.
 
-mod common;
+use crate::common;
 
 use common::{dexter, ok, scene, scratch};
 use std::collections::BTreeSet;

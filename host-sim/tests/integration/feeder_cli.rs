@@ -6,7 +6,7 @@
 //! other vertex above it); the drift phase against the belt's velocity; the infeasibility
 //! figures against a run just past them.
 
-mod common;
+use crate::common;
 
 use common::{dexter, ok, scene, scratch};
 use serde_json::Value;

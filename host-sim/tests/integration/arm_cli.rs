@@ -11,7 +11,7 @@
 //!
 //! Each shipped scene is run once (JSON, trace and plots) and the results shared.
 
-mod common;
+use crate::common;
 
 use common::{dexter, ok, scene, scratch};
 use serde_json::Value;
@@ -258,7 +258,7 @@ fn the_nine_knot_roll_winds_up_then_lands_a_quarter_turn_on() {
 /// cannot be stopped outright (the stop's centre of pressure would be `2 rho^2 / a`
 /// beyond the striking vertex), so it rocks onto the striking vertex at
 /// `rho^2 / (rho^2 + a^2/2)` of its rate, with an impulse needing friction
-/// `(1 - k) / (1 + k)` (tests/arm_impact.rs derives both), and rocks back and forth on
+/// `(1 - k) / (1 + k)` (tests/integration/arm_impact.rs derives both), and rocks back and forth on
 /// its new edge until it settles. Every impulse pushes, acts on the edge and lies inside
 /// the cone of `mu_required`.
 #[test]

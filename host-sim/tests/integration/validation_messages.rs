@@ -2,7 +2,7 @@
 //! messages in internal names. Expected ranges come from the docs (docs/planar.md,
 //! docs/hopper.md, docs/scenes.md), never from the code under test.
 
-mod common;
+use crate::common;
 
 use common::{dexter, scene};
 

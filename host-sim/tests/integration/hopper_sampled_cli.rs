@@ -8,7 +8,7 @@
 //! period of the exact law's times). The HIL test needs `qemu-system-arm` and the
 //! `thumbv7em-none-eabihf` target (it builds the firmware; it fails, never skips).
 
-mod common;
+use crate::common;
 
 use common::svg::Svg;
 use common::{csv_rows, dexter, json, ok, scene, scratch};

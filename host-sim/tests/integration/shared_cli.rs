@@ -3,7 +3,7 @@
 //! directories created, sweeps that refuse what they cannot hold and give the same result on
 //! one core as on all, options a system does not support refused.
 
-mod common;
+use crate::common;
 
 use common::{dexter, scene, scratch};
 use std::io::Write;

@@ -13,10 +13,10 @@
 //!
 //! The SIL-tracked catch comes down 0.0288 rad from flat: its vertex strikes first
 //! (`impact::Rig::vertex_impact`), and that corner's sticking impulse needs friction 0.737
-//! (recomputed by hand in `tests/arm_impact.rs`), more than the plan's mu: `tracked` says
+//! (recomputed by hand in `tests/integration/arm_impact.rs`), more than the plan's mu: `tracked` says
 //! `slipped` at that impact, no longer "missed" for an unmodelled strike.
 
-mod common;
+use crate::common;
 
 use common::{ok, scene, scratch};
 use serde_json::Value;

@@ -2,7 +2,7 @@
 //! scenes, checked against the closed forms of Koditschek & Bühler (eq. 15, 19) and for
 //! named errors.
 
-mod common;
+use crate::common;
 
 use common::{dexter, json, scratch};
 use std::path::PathBuf;

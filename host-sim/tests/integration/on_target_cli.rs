@@ -5,7 +5,7 @@
 //! The QEMU test builds the firmware first (as `scripts/test.sh` does); it needs
 //! `qemu-system-arm` and the `thumbv7em-none-eabihf` target, and fails naming them.
 
-mod common;
+use crate::common;
 
 use common::{dexter, firmware, scene, scratch};
 use std::path::Path;

@@ -11,7 +11,7 @@
 //! Nothing here writes to a real `/dev` file: devices are made with mknod(2) inside the
 //! test's scratch directory (as root; otherwise the test says it did not exercise them).
 
-mod common;
+use crate::common;
 
 use common::{dexter, scene, scratch};
 use std::ffi::CString;

@@ -4,7 +4,7 @@
 //! of the edge it arrives on, at a radius below the old fixed-floor minimum (the case of
 //! part 44 of the feeding sweep), now planned and fed.
 
-mod common;
+use crate::common;
 
 use dexter_sim::model::feeder::execute::{execute, FEED_TOL_M};
 use dexter_sim::model::feeder::geometry::{Pose, Vec2};

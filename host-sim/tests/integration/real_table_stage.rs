@@ -2,7 +2,7 @@
 //! regulation (`real_table.kappa_x_pm`, `real_table.kappa_xdot_spm`), from the command
 //! line. Ranges and defaults as docs/planar.md documents them.
 
-mod common;
+use crate::common;
 
 use common::{dexter, scene};
 

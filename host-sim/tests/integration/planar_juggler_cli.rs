@@ -4,7 +4,7 @@
 //! v+ = (alpha + (1 + alpha)(kappa0 + kappa1 (eta* - v^2/2))) v, and every run settles on
 //! its fixed point eta_fp = eta* - (1 - alpha - (1 + alpha) kappa0)/((1 + alpha) kappa1).
 
-mod common;
+use crate::common;
 
 use common::{dexter, ok, scene, scratch};
 use serde_json::Value;

@@ -8,7 +8,7 @@
 //! Both build the firmware first (as `scripts/test.sh` does); they need `qemu-system-arm`
 //! and the `thumbv7em-none-eabihf` target, and fail naming them.
 
-mod common;
+use crate::common;
 
 use common::{firmware, scene, scratch};
 use std::process::{Command, Stdio};

@@ -3,7 +3,7 @@
 //! closed-form curves with the closed form computed here. A plot that draws no data, the
 //! wrong series or a shifted one fails.
 
-mod common;
+use crate::common;
 
 use common::svg::Svg;
 use common::{csv_rows, ok, scene, scratch};

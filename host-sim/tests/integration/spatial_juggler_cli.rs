@@ -3,7 +3,7 @@
 //! heights follow eq. 8's map (the line juggler); the linearization's lateral and vertical
 //! eigenvalues are the double integrator's and eq. 8's slope (docs/spatial.md).
 
-mod common;
+use crate::common;
 
 use common::{dexter, ok, scene, scratch};
 use serde_json::Value;

@@ -1,7 +1,7 @@
 //! The 1JOC primitives, the goal-edge rule, the convergent turn, infeasibility reports,
 //! and the four parts to ship as scenes (issue 16, items 2-4).
 
-mod common;
+use crate::common;
 
 use dexter_sim::model::feeder::execute::{
     execute, plan_and_execute, sweep, sweep_arrivals, Noise, SweepSpec,

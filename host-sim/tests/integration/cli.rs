@@ -1,7 +1,7 @@
 //! The `dexter` binary end to end: bad scenes exit non-zero naming the key and the reason
 //! (never a panic); `--json` and `--trace` carry what the docs promise.
 
-mod common;
+use crate::common;
 
 use common::dexter;
 use std::path::PathBuf;
