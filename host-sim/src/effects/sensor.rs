@@ -199,7 +199,7 @@ pub fn round_half_away(x: f64) -> f64 {
     // in [2^52, 2^53) is 1) and subtracting it again is exact, as is `a - r`. A tie that
     // went down to even is the one case half away from zero rounds otherwise. No branch on
     // the fraction (as random as the sensor noise, a branch on it was mispredicted half the
-    // time) and no integer conversion: 9 instructions where the `i64` version took 25
+    // time) and no integer conversion: 15 instructions where the `i64` version took 27
     // (`BENCHMARKS.md`).
     let r = (a + INTEGRAL) - INTEGRAL;
     let r = r + if a - r == 0.5 { 1.0 } else { 0.0 };
