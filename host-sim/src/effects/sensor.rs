@@ -192,18 +192,19 @@ impl<const N: usize> Measure<N> for Measured<N> {
 pub fn round_half_away(x: f64) -> f64 {
     const INTEGRAL: f64 = 4_503_599_627_370_496.0; // 2^52
     let a = x.abs();
-    if !(a < INTEGRAL) {
-        return x;
+    if a < INTEGRAL {
+        // Adding 2^52 rounds `a` to an integer (to nearest, ties to even: the spacing of f64
+        // in [2^52, 2^53) is 1) and subtracting it again is exact, as is `a - r`. A tie that
+        // went down to even is the one case half away from zero rounds otherwise. No branch on
+        // the fraction (as random as the sensor noise, a branch on it was mispredicted half the
+        // time) and no integer conversion: 15 instructions where the `i64` version took 27
+        // (`BENCHMARKS.md`).
+        let r = (a + INTEGRAL) - INTEGRAL;
+        let r = r + if a - r == 0.5 { 1.0 } else { 0.0 };
+        r.copysign(x)
+    } else {
+        x
     }
-    // Adding 2^52 rounds `a` to an integer (to nearest, ties to even: the spacing of f64
-    // in [2^52, 2^53) is 1) and subtracting it again is exact, as is `a - r`. A tie that
-    // went down to even is the one case half away from zero rounds otherwise. No branch on
-    // the fraction (as random as the sensor noise, a branch on it was mispredicted half the
-    // time) and no integer conversion: 15 instructions where the `i64` version took 27
-    // (`BENCHMARKS.md`).
-    let r = (a + INTEGRAL) - INTEGRAL;
-    let r = r + if a - r == 0.5 { 1.0 } else { 0.0 };
-    r.copysign(x)
 }
 
 /// One measured sample.
@@ -326,9 +327,10 @@ impl<const N: usize> Delay<N> for Latency<N> {
         // them is returned as it is stored, not read back from `self.latest`
         let due_by = t_s + TIME_SLACK_S;
         let before = self.delivered;
-        while self.delivered < self.pushed
-            && !(self.pending[(self.delivered & RING_MASK) as usize].0 > due_by)
-        {
+        while self.delivered < self.pushed {
+            if self.pending[(self.delivered & RING_MASK) as usize].0 > due_by {
+                break;
+            }
             self.delivered += 1;
         }
         if self.delivered > before {
