@@ -470,4 +470,3 @@ fn limits_too_tight_for_the_plan_are_reported() {
     let s = run_real(&triangle(), table, 10).summary;
     assert!(s.plan_steps.limited > 0, "{s:?}");
 }
-
