@@ -25,10 +25,12 @@ if [ $# -ge 1 ]; then bin=$1; else cargo build --release -q -p dexter-sim; bin=t
 
 # Ceilings, instructions (issue 26): the passive bounce's goal; the others at today's
 # figures plus a small margin, so a change that costs more fails until it is justified
-# here (the SIL goal is 400).
+# here. SIL: 573 since the sensor's PCG noise, the cheaper rounding and actuator tests and
+# the core's precomputed flights (608 before; the goal is 400, BENCHMARKS.md says where
+# the 573 go).
 MAX_PASSIVE=100
 MAX_MIRROR=200
-MAX_SIL=620
+MAX_SIL=585
 
 ir() { valgrind --tool=callgrind --callgrind-out-file=/dev/null "$@" 2>&1 >/dev/null \
   | sed -n 's/.*Collected : \([0-9]*\).*/\1/p'; }

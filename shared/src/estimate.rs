@@ -106,6 +106,37 @@ pub struct Estimate {
     pub impact: bool,
 }
 
+/// A ballistic flight of fixed duration with its gravity terms computed once:
+/// [`BallState::flown`] bit for bit (`h + v t - ((g/2) t) t`, `v - g t`), without the
+/// three multiplications of `g` and `t` on every step (the estimator flies twice a step).
+#[derive(Clone, Copy, Debug)]
+struct FixedFlight {
+    duration_s: f32,
+    /// `((g / 2) t) t`, m, as `flown` computes it.
+    drop_m: f32,
+    /// `g t`, m/s.
+    speed_lost_mps: f32,
+}
+
+impl FixedFlight {
+    fn new(duration_s: f32, gravity_mps2: f32) -> Self {
+        Self {
+            duration_s,
+            drop_m: 0.5 * gravity_mps2 * duration_s * duration_s,
+            speed_lost_mps: gravity_mps2 * duration_s,
+        }
+    }
+
+    /// `ball.flown(duration_s, gravity_mps2)`.
+    #[inline(always)]
+    fn fly(&self, ball: &BallState<f32>) -> BallState<f32> {
+        BallState::new(
+            ball.height_m + ball.velocity_mps * self.duration_s - self.drop_m,
+            ball.velocity_mps - self.speed_lost_mps,
+        )
+    }
+}
+
 /// Alpha-beta ball estimator with a ballistic model and impact re-initialisation.
 #[derive(Clone, Debug)]
 pub struct BallEstimator {
@@ -117,6 +148,10 @@ pub struct BallEstimator {
     /// The velocity gain c/dt, 1/s, computed once (bit-identical to dividing every step).
     gain_velocity_per_s: f32,
     gravity_mps2: f32,
+    /// One sample period's flight (the prediction).
+    period: FixedFlight,
+    /// The latency's flight (the output, now).
+    latency: FixedFlight,
     phase: Phase,
     /// State at the time of the last measurement.
     ball: BallState<f32>,
@@ -136,6 +171,8 @@ impl BallEstimator {
             inv_dt_per_s: 1.0 / dt_s,
             gain_velocity_per_s: params.gain_velocity / dt_s,
             gravity_mps2,
+            period: FixedFlight::new(dt_s, gravity_mps2),
+            latency: FixedFlight::new(params.latency_s, gravity_mps2),
             phase: Phase::Empty,
             ball: BallState::default(),
             outliers: 0,
@@ -152,7 +189,6 @@ impl BallEstimator {
     /// Advance one sample period with the measured ball height `z_m` (finite, checked by the
     /// caller) and the measured paddle state; returns the latency-compensated estimate.
     pub fn update(&mut self, z_m: f32, paddle: &PaddleState<f32>) -> Estimate {
-        let dt = self.dt_s;
         let mut impact = false;
         match self.phase {
             Phase::Empty => {
@@ -162,7 +198,7 @@ impl BallEstimator {
                 self.initialise(z0, z_m);
             }
             Phase::Tracking { accepted } => {
-                let mut pred = self.ball.flown(dt, self.gravity_mps2);
+                let mut pred = self.period.fly(&self.ball);
                 impact = self.apply_impact(&mut pred, &self.paddle_at_sample_time(paddle));
                 let innovation = z_m - pred.height_m;
                 if innovation.abs() <= self.params.gate_m {
@@ -191,7 +227,7 @@ impl BallEstimator {
     pub fn coast(&mut self, paddle: &PaddleState<f32>) -> Estimate {
         let mut impact = false;
         if let Phase::Tracking { .. } = self.phase {
-            let mut pred = self.ball.flown(self.dt_s, self.gravity_mps2);
+            let mut pred = self.period.fly(&self.ball);
             impact = self.apply_impact(&mut pred, &self.paddle_at_sample_time(paddle));
             self.ball = pred;
         }
@@ -232,7 +268,7 @@ impl BallEstimator {
 
     fn output(&self, paddle: &PaddleState<f32>, impact: bool) -> Estimate {
         let valid = matches!(self.phase, Phase::Tracking { accepted } if accepted >= self.params.settle_samples);
-        let mut now = self.ball.flown(self.params.latency_s, self.gravity_mps2);
+        let mut now = self.latency.fly(&self.ball);
         let impact = self.apply_impact(&mut now, paddle) || impact;
         Estimate {
             ball: now,
@@ -252,6 +288,29 @@ mod tests {
     use super::*;
 
     const G: f32 = 9.81;
+
+    /// The estimator's fixed flights are `BallState::flown` bit for bit.
+    #[test]
+    fn fixed_flights_are_flown_bit_for_bit() {
+        let mut x = 0x1234_5678u32;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x as f32 / u32::MAX as f32
+        };
+        for _ in 0..100_000 {
+            let (t, g) = (next() * 0.02, 1.0 + next() * 20.0);
+            let ball = BallState::new(next() * 4.0 - 1.0, next() * 20.0 - 10.0);
+            let (want, got) = (ball.flown(t, g), FixedFlight::new(t, g).fly(&ball));
+            assert_eq!(
+                got.height_m.to_bits(),
+                want.height_m.to_bits(),
+                "{ball:?} {t} {g}"
+            );
+            assert_eq!(got.velocity_mps.to_bits(), want.velocity_mps.to_bits());
+        }
+    }
 
     #[test]
     fn noiseless_flight_is_tracked_exactly_after_two_samples() {

@@ -67,6 +67,11 @@ pub struct Tracker {
     /// 1/dt, 1/s, computed once: the step multiplies instead of dividing (a `vdiv.f32` is
     /// 14 cycles on a Cortex-M4, a `vmul.f32` 1); within 1 ulp of dividing by dt.
     inv_dt_per_s: f32,
+    /// `-velocity_max`, `-accel_max` and `2 accel_max`, computed once (the same values the
+    /// step computed; a negation or doubling and its constant were ~6 instructions a step).
+    neg_velocity_max_mps: f32,
+    neg_accel_max_mps2: f32,
+    two_accel_max_mps2: f32,
 }
 
 impl Tracker {
@@ -88,6 +93,9 @@ impl Tracker {
             limits,
             dt_s,
             inv_dt_per_s: 1.0 / dt_s,
+            neg_velocity_max_mps: -limits.velocity_max_mps,
+            neg_accel_max_mps2: -limits.accel_max_mps2,
+            two_accel_max_mps2: 2.0 * limits.accel_max_mps2,
         })
     }
 
@@ -111,7 +119,7 @@ impl Tracker {
                 height_m: r.height_m,
                 velocity_mps: r
                     .velocity_mps
-                    .clamp_r(-l.velocity_max_mps, l.velocity_max_mps),
+                    .clamp_r(self.neg_velocity_max_mps, l.velocity_max_mps),
                 accel_mps2: r.accel_mps2,
             }
         }
@@ -130,7 +138,7 @@ impl Tracker {
     /// period if it can, else the largest braking acceleration.
     pub fn brake(&self, paddle: &PaddleState<f32>) -> f32 {
         let a = self.limits.accel_max_mps2;
-        (-paddle.velocity_mps * self.inv_dt_per_s).clamp_r(-a, a)
+        (-paddle.velocity_mps * self.inv_dt_per_s).clamp_r(self.neg_accel_max_mps2, a)
     }
 
     /// [`Self::brake`], with `paddle` dead-reckoned one period under it: where the safe
@@ -153,10 +161,14 @@ impl Tracker {
         // speed from which the paddle can still stop before each end of its travel
         let up_room = (l.max_height_m - paddle.height_m).max_r(0.0);
         let down_room = (paddle.height_m - l.min_height_m).max_r(0.0);
-        let v_up = l.velocity_max_mps.min_r((2.0 * a * up_room).sqrt());
-        let v_down = l.velocity_max_mps.min_r((2.0 * a * down_room).sqrt());
+        let v_up = l
+            .velocity_max_mps
+            .min_r((self.two_accel_max_mps2 * up_room).sqrt());
+        let v_down = l
+            .velocity_max_mps
+            .min_r((self.two_accel_max_mps2 * down_room).sqrt());
         let v_next = (paddle.velocity_mps + u * self.dt_s).clamp_r(-v_down, v_up);
-        ((v_next - paddle.velocity_mps) * self.inv_dt_per_s).clamp_r(-a, a)
+        ((v_next - paddle.velocity_mps) * self.inv_dt_per_s).clamp_r(self.neg_accel_max_mps2, a)
     }
 }
 

@@ -76,7 +76,13 @@ impl SecondOrderActuator {
     #[inline]
     fn stops_out_of_reach(&self, p: &PaddleState<f64>, a: f64, horizon_s: f64) -> bool {
         let travel_m = horizon_s * (p.velocity_mps.abs() + 0.5 * a.abs() * horizon_s);
-        let room_m = (self.max_height_m - p.height_m).min(p.height_m - self.min_height_m);
+        // the smaller room by one comparison: both are NaN or neither (`f64::min`'s NaN
+        // handling cost 5 instructions a segment)
+        let (up_m, down_m) = (
+            self.max_height_m - p.height_m,
+            p.height_m - self.min_height_m,
+        );
+        let room_m = if up_m < down_m { up_m } else { down_m };
         travel_m * (1.0 + STOP_CLEARANCE) < room_m * (1.0 - STOP_CLEARANCE)
     }
 
@@ -128,23 +134,35 @@ impl SecondOrderActuator {
 }
 
 impl Actuator for SecondOrderActuator {
+    /// The command clamped to the force limit (0 if not finite), or 0 where a stop or the
+    /// speed limit blocks its direction. Spelled for the common case, a command within the
+    /// limit (one comparison), and per direction (only its own limits are tested): the
+    /// same values as `clamp` and the four-way test it replaces, ~10 instructions fewer
+    /// per SIL step.
+    #[inline]
     fn accel(&self, p: &PaddleState<f64>, command_mps2: f64) -> f64 {
-        let a = if command_mps2.is_finite() {
-            command_mps2.clamp(-self.accel_max_mps2, self.accel_max_mps2)
+        let a_max = self.accel_max_mps2;
+        let a = if command_mps2.abs() <= a_max {
+            command_mps2
+        } else if command_mps2.is_finite() {
+            a_max.copysign(command_mps2)
         } else {
             0.0
         };
-        let at_top = p.height_m >= self.max_height_m && p.velocity_mps >= 0.0;
-        let at_bottom = p.height_m <= self.min_height_m && p.velocity_mps <= 0.0;
-        if (at_top && a > 0.0) || (at_bottom && a < 0.0) {
-            return 0.0;
+        let blocked = if a > 0.0 {
+            (p.height_m >= self.max_height_m && p.velocity_mps >= 0.0)
+                || p.velocity_mps >= self.velocity_max_mps
+        } else if a < 0.0 {
+            (p.height_m <= self.min_height_m && p.velocity_mps <= 0.0)
+                || p.velocity_mps <= -self.velocity_max_mps
+        } else {
+            false
+        };
+        if blocked {
+            0.0
+        } else {
+            a
         }
-        if (p.velocity_mps >= self.velocity_max_mps && a > 0.0)
-            || (p.velocity_mps <= -self.velocity_max_mps && a < 0.0)
-        {
-            return 0.0;
-        }
-        a
     }
 
     fn time_to_switch(&self, p: &PaddleState<f64>, a: f64) -> f64 {
@@ -226,6 +244,58 @@ mod tests {
             velocity_max_mps: 2.0,
             min_height_m: -1.0,
             max_height_m: 1.0,
+        }
+    }
+
+    /// The old spelling of [`SecondOrderActuator::accel`]: clamp, then the four blocked
+    /// cases.
+    fn accel_by_clamp(act: &SecondOrderActuator, p: &PaddleState<f64>, command: f64) -> f64 {
+        let a = if command.is_finite() {
+            command.clamp(-act.accel_max_mps2, act.accel_max_mps2)
+        } else {
+            0.0
+        };
+        let at_top = p.height_m >= act.max_height_m && p.velocity_mps >= 0.0;
+        let at_bottom = p.height_m <= act.min_height_m && p.velocity_mps <= 0.0;
+        if (at_top && a > 0.0) || (at_bottom && a < 0.0) {
+            return 0.0;
+        }
+        if (p.velocity_mps >= act.velocity_max_mps && a > 0.0)
+            || (p.velocity_mps <= -act.velocity_max_mps && a < 0.0)
+        {
+            return 0.0;
+        }
+        a
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+        /// The acceleration is the old spelling's bit for bit, at and past every limit, for
+        /// signed zeros and non-finite commands.
+        #[test]
+        fn accel_matches_clamp_and_the_four_blocked_cases(
+            h in -1.2f64..1.2,
+            v in -2.5f64..2.5,
+            command in -20.0f64..20.0,
+            pick in 0u8..8,
+        ) {
+            let act = act();
+            let (h, v) = match pick {
+                0 => (1.0, v.abs()),
+                1 => (-1.0, -v.abs()),
+                2 => (h, 2.0),
+                3 => (h, -2.0),
+                _ => (h, v),
+            };
+            let command = match pick {
+                4 => f64::NAN,
+                5 => f64::INFINITY.copysign(command),
+                6 => 0.0f64.copysign(command),
+                7 => 10.0f64.copysign(command),
+                _ => command,
+            };
+            let p = PaddleState::new(h, v);
+            prop_assert_eq!(act.accel(&p, command).to_bits(), accel_by_clamp(&act, &p, command).to_bits());
         }
     }
 

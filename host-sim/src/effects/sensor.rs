@@ -6,7 +6,7 @@
 //! | effect | off | on |
 //! | --- | --- | --- |
 //! | rate ([`Clock`]) | [`AtControlSteps`]: one sample at every control step, sequence number = step | [`Periodic`]: samples every `1/rate` s, at their own times (plant events) |
-//! | noise and quantization ([`Measure`]) | [`Exact`] | [`Measured`]: per channel, Gaussian noise N(0, sigma) (one seeded generator, channels drawn in order, a channel with sigma 0 draws nothing), then rounding to a multiple of its step (0 = none) |
+//! | noise and quantization ([`Measure`]) | [`Exact`] | [`Measured`]: per channel, Gaussian noise N(0, sigma) (one seeded generator, [`NoiseRng`], channels drawn in order, a channel with sigma 0 draws nothing), then rounding to a multiple of its step (0 = none) |
 //! | latency ([`Delay`]) | [`NoLatency`]: a sample is seen at once | [`Latency`]: seen `latency_s` after it was taken |
 //!
 //! A control frame carries the newest delivered sample and its sequence number (a repeated
@@ -20,7 +20,7 @@
 //! (compression, foot switch, height).
 
 use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
+use rand_distr::{Distribution, StandardNormal};
 
 /// When samples are taken.
 pub trait Clock {
@@ -123,7 +123,8 @@ impl<const N: usize> Measure<N> for Exact {
 /// One channel's noise and quantization.
 #[derive(Clone, Copy, Debug)]
 struct Channel {
-    normal: Option<Normal<f64>>,
+    /// Standard deviation of the noise (0 = none).
+    sigma: f64,
     step: f64,
     /// `1 / step` (0 without quantization): the quantizer multiplies instead of dividing
     /// on every sample (a division was a tenth of the line's SIL loop). The level
@@ -131,11 +132,18 @@ struct Channel {
     per_step: f64,
 }
 
+/// The sensors' noise generator: PCG-64 MCG (128-bit multiplicative congruential state,
+/// XSL-RR output), seeded through `SeedableRng::seed_from_u64`. One 128-bit multiply per
+/// draw, kept inline in the sampling loop; ChaCha12 (`StdRng`, before) cost ~30
+/// instructions a draw in its block refills and a call (`BENCHMARKS.md`). Named, not
+/// `SmallRng`, so a seed gives the same noise whatever `rand`'s version.
+pub type NoiseRng = rand_pcg::Pcg64Mcg;
+
 /// Gaussian noise and quantization per channel, reproducible from a seed.
 #[derive(Clone, Debug)]
 pub struct Measured<const N: usize> {
     channels: [Channel; N],
-    rng: rand::rngs::StdRng,
+    rng: NoiseRng,
 }
 
 impl<const N: usize> Measured<N> {
@@ -143,26 +151,30 @@ impl<const N: usize> Measured<N> {
     /// not finite = none) and quantization steps `step` (per channel; 0 = none), from `seed`.
     pub fn new(sigma: [f64; N], step: [f64; N], seed: u64) -> Self {
         let channels = core::array::from_fn(|i| Channel {
-            normal: (sigma[i] > 0.0)
-                .then(|| Normal::new(0.0, sigma[i]).ok())
-                .flatten(),
+            sigma: if sigma[i] > 0.0 && sigma[i].is_finite() {
+                sigma[i]
+            } else {
+                0.0
+            },
             step: step[i],
             per_step: if step[i] > 0.0 { 1.0 / step[i] } else { 0.0 },
         });
         Self {
             channels,
-            rng: rand::rngs::StdRng::seed_from_u64(seed),
+            rng: NoiseRng::seed_from_u64(seed),
         }
     }
 }
 
 impl<const N: usize> Measure<N> for Measured<N> {
-    #[inline]
+    #[inline(always)]
     fn measure(&mut self, truth: [f64; N]) -> [f64; N] {
         let mut out = truth;
         for (z, c) in out.iter_mut().zip(&self.channels) {
-            if let Some(n) = &c.normal {
-                *z += n.sample(&mut self.rng);
+            if c.sigma > 0.0 {
+                // N(0, sigma) as sigma z, z ~ N(0, 1) (rand_distr's ziggurat)
+                let unit: f64 = StandardNormal.sample(&mut self.rng);
+                *z += c.sigma * unit;
             }
             if c.step > 0.0 {
                 *z = round_half_away(*z * c.per_step) * c.step;
@@ -173,23 +185,26 @@ impl<const N: usize> Measure<N> for Measured<N> {
 }
 
 /// `x.round()` (half away from zero, the sign of zero kept), bit for bit, without the
-/// library call `f64::round` becomes on x86-64's baseline (no SSE4.1 `roundsd`): the
-/// truncation `x as i64` is one instruction and `x - t` is exact. Values of magnitude
-/// 2^52 and more are integers already (and NaN and infinities are returned as they are).
+/// library call `f64::round` becomes on x86-64's baseline (no SSE4.1 `roundsd`). Values of
+/// magnitude 2^52 and more are integers already (and NaN and infinities are returned as
+/// they are).
 #[inline]
 pub fn round_half_away(x: f64) -> f64 {
     const INTEGRAL: f64 = 4_503_599_627_370_496.0; // 2^52
-    if x.is_nan() || x.abs() >= INTEGRAL {
-        return x;
+    let a = x.abs();
+    if a < INTEGRAL {
+        // Adding 2^52 rounds `a` to an integer (to nearest, ties to even: the spacing of f64
+        // in [2^52, 2^53) is 1) and subtracting it again is exact, as is `a - r`. A tie that
+        // went down to even is the one case half away from zero rounds otherwise. No branch on
+        // the fraction (as random as the sensor noise, a branch on it was mispredicted half the
+        // time) and no integer conversion: 15 instructions where the `i64` version took 27
+        // (`BENCHMARKS.md`).
+        let r = (a + INTEGRAL) - INTEGRAL;
+        let r = r + if a - r == 0.5 { 1.0 } else { 0.0 };
+        r.copysign(x)
+    } else {
+        x
     }
-    // Integer arithmetic instead of branches: whether the fraction reaches one half is as
-    // random as the sensor noise, so a branch on it is mispredicted half the time (it was
-    // the costliest line of the SIL loop, `BENCHMARKS.md`). The result is the same: every
-    // integer of magnitude below 2^53 converts exactly.
-    let t = x as i64;
-    let fraction = x - t as f64;
-    let step = i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5);
-    ((t + step) as f64).copysign(x)
 }
 
 /// One measured sample.
@@ -308,17 +323,20 @@ impl<const N: usize> Delay<N> for Latency<N> {
 
     #[inline]
     fn latest(&mut self, t_s: f64) -> Option<Sample<N>> {
-        // deliver everything due by now (with slack for the rounding of t)
+        // deliver everything due by now (with slack for the rounding of t); the newest of
+        // them is returned as it is stored, not read back from `self.latest`
+        let due_by = t_s + TIME_SLACK_S;
+        let before = self.delivered;
         while self.delivered < self.pushed {
-            let (due, values) = self.pending[(self.delivered & RING_MASK) as usize];
-            if due > t_s + TIME_SLACK_S {
+            if self.pending[(self.delivered & RING_MASK) as usize].0 > due_by {
                 break;
             }
-            self.latest = Some(Sample {
-                seq: self.delivered as u32,
-                values,
-            });
             self.delivered += 1;
+        }
+        if self.delivered > before {
+            let newest = self.at(self.delivered - 1);
+            self.latest = Some(newest);
+            return Some(newest);
         }
         match self.latest {
             Some(s) => Some(s),
@@ -357,7 +375,7 @@ impl<const N: usize, C: Clock, M: Measure<N>, D: Delay<N>> Sampled<N, C, M, D> {
     }
 
     /// Take a sample of `truth` at `t_s`.
-    #[inline]
+    #[inline(always)]
     pub fn take(&mut self, t_s: f64, truth: [f64; N]) {
         let seq = self.clock.advance();
         let values = self.measure.measure(truth);
@@ -397,7 +415,9 @@ impl<C: Clock, M: Measure<1>, D: Delay<1>> Sensor for Sampled<1, C, M, D> {
     fn next_sample_time_s(&self) -> f64 {
         Sampled::next_sample_time_s(self)
     }
-    #[inline]
+    /// Inlined: out of line, the call and its saved registers cost ~40 instructions a SIL
+    /// step, more than the draw itself (`BENCHMARKS.md`).
+    #[inline(always)]
     fn sample(&mut self, t_s: f64, height_m: f64) {
         self.take(t_s, [height_m]);
     }

@@ -233,8 +233,10 @@ fn the_horizontal_regulation_keeps_the_body_over_a_finite_table() {
         assert!(s.max_abs_x_m < hi, "seed {seed}: {}", s.max_abs_x_m);
         let late = run.impacts[250..].iter().map(|r| r.before.x_m.abs());
         let late_max = late.fold(0.0, f64::max);
-        // measured 0.40 m for seed 15: the regulation is slow against the tilt mode
-        assert!(late_max < 0.5, "seed {seed}: late |x| {late_max}");
+        // the regulation is slow against the tilt mode: over seeds 1-20 every run completes
+        // and the late |x| is 0.17-0.51 m (seed 1 the largest, 0.508; with the sensors' PCG
+        // noise; with ChaCha12's, seed 15 measured 0.40 and the bound was 0.5)
+        assert!(late_max < 0.55, "seed {seed}: late |x| {late_max}");
         // the paper's law, otherwise the same table: off the table within 20 impacts
         let mut pure = papers_law(RealTable::realistic(seed));
         pure.controller.kappa_rate_s = table.controller.kappa_rate_s;
