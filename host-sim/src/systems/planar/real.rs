@@ -4,6 +4,7 @@
 //! scene runs the paper's ideal table. Keys, units and defaults: `docs/planar.md`, "The real
 //! table".
 
+use crate::effects::sensor::MAX_PENDING;
 use crate::model::planar::camera::CameraConfig;
 use crate::model::planar::real_table::{controller_params_for, DriveLimits, RealTable};
 use crate::model::planar::{ContactLaw, PlanarModel, PlanarParams};
@@ -286,6 +287,15 @@ impl CameraTable {
                 k("latency_s"),
                 format!(
                     "must be in [0, {MAX_LATENCY_S}) s (the controller predicts across less than {MAX_LATENCY_S} s of delay), got {latency}"
+                ),
+            ));
+        }
+        let in_flight = latency * self.rate_hz;
+        if in_flight > MAX_PENDING as f64 {
+            return Err(SceneError::new(
+                k("latency_s"),
+                format!(
+                    "x real_table.camera.rate_hz is {in_flight} samples in flight, more than the {MAX_PENDING} the camera holds"
                 ),
             ));
         }
