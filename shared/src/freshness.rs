@@ -43,8 +43,10 @@ impl Freshness {
     /// it repeats the last one within `stale_limit_steps` periods, else [`Fault::Stale`].
     #[inline(always)]
     pub fn check(&mut self, seq: u32, stale_limit_steps: u16) -> Result<bool, Fault> {
+        // forward by 1 ..= 2^31 - 2: `ahead - 1` below 2^31 - 2, one unsigned comparison (a
+        // repeat wraps to u32::MAX)
         let ahead = seq.wrapping_sub(self.last_seq);
-        if !self.seen || (ahead != 0 && ahead < u32::MAX / 2) {
+        if !self.seen || ahead.wrapping_sub(1) < u32::MAX / 2 - 1 {
             self.last_seq = seq;
             self.seen = true;
             self.stale_steps = 0;
