@@ -126,6 +126,10 @@ struct Channel {
     /// Standard deviation of the noise (0 = none).
     sigma: f64,
     step: f64,
+    /// `sigma > 0` and `step > 0`, as flags (a flag is one comparison a sample, a float
+    /// test against zero two more).
+    noisy: bool,
+    quantized: bool,
     /// `1 / step` (0 without quantization): the quantizer multiplies instead of dividing
     /// on every sample (a division was a tenth of the line's SIL loop). The level
     /// boundaries then sit within an ulp of the exact half-multiples of the step.
@@ -139,11 +143,61 @@ struct Channel {
 /// `SmallRng`, so a seed gives the same noise whatever `rand`'s version.
 pub type NoiseRng = rand_pcg::Pcg64Mcg;
 
+/// Standard normal draws (`rand_distr`'s ziggurat over a [`NoiseRng`]) taken in order,
+/// drawn [`NORMAL_BLOCK`] at a time: the sampling loop reads one from the block (the same
+/// sequence as drawing each on its own), the draws run in a loop of their own that keeps
+/// the generator and the ziggurat in registers (BENCHMARKS.md, "SIL at 1 kHz").
+#[derive(Clone, Debug)]
+struct NormalBlock {
+    rng: NoiseRng,
+    block: [f64; NORMAL_BLOCK],
+    /// The next draw's index in `block` (`NORMAL_BLOCK`: drawn out).
+    next: usize,
+}
+
+/// Draws in a [`NormalBlock`].
+const NORMAL_BLOCK: usize = 64;
+
+impl NormalBlock {
+    fn new(seed: u64) -> Self {
+        Self {
+            rng: NoiseRng::seed_from_u64(seed),
+            block: [0.0; NORMAL_BLOCK],
+            next: NORMAL_BLOCK,
+        }
+    }
+
+    /// The next draw.
+    #[inline(always)]
+    fn draw(&mut self) -> f64 {
+        if self.next >= NORMAL_BLOCK {
+            self.refill();
+        }
+        let z = self.block[self.next];
+        self.next += 1;
+        z
+    }
+
+    #[inline(never)]
+    fn refill(&mut self) {
+        // the generator in a local, so its state stays in registers across the block
+        let mut rng = self.rng.clone();
+        for pair in self.block.chunks_exact_mut(4) {
+            pair[0] = StandardNormal.sample(&mut rng);
+            pair[1] = StandardNormal.sample(&mut rng);
+            pair[2] = StandardNormal.sample(&mut rng);
+            pair[3] = StandardNormal.sample(&mut rng);
+        }
+        self.rng = rng;
+        self.next = 0;
+    }
+}
+
 /// Gaussian noise and quantization per channel, reproducible from a seed.
 #[derive(Clone, Debug)]
 pub struct Measured<const N: usize> {
     channels: [Channel; N],
-    rng: NoiseRng,
+    normal: NormalBlock,
 }
 
 impl<const N: usize> Measured<N> {
@@ -158,10 +212,12 @@ impl<const N: usize> Measured<N> {
             },
             step: step[i],
             per_step: if step[i] > 0.0 { 1.0 / step[i] } else { 0.0 },
+            noisy: sigma[i] > 0.0 && sigma[i].is_finite(),
+            quantized: step[i] > 0.0,
         });
         Self {
             channels,
-            rng: NoiseRng::seed_from_u64(seed),
+            normal: NormalBlock::new(seed),
         }
     }
 }
@@ -171,12 +227,11 @@ impl<const N: usize> Measure<N> for Measured<N> {
     fn measure(&mut self, truth: [f64; N]) -> [f64; N] {
         let mut out = truth;
         for (z, c) in out.iter_mut().zip(&self.channels) {
-            if c.sigma > 0.0 {
+            if c.noisy {
                 // N(0, sigma) as sigma z, z ~ N(0, 1) (rand_distr's ziggurat)
-                let unit: f64 = StandardNormal.sample(&mut self.rng);
-                *z += c.sigma * unit;
+                *z += c.sigma * self.normal.draw();
             }
-            if c.step > 0.0 {
+            if c.quantized {
                 *z = round_half_away(*z * c.per_step) * c.step;
             }
         }
@@ -274,9 +329,11 @@ pub struct Latency<const N: usize> {
     pending: Box<[(f64, [f64; N]); RING_SLOTS]>,
     /// Samples pushed.
     pushed: u64,
-    /// Index of the oldest undelivered sample (`pushed` if none).
+    /// Index of the oldest undelivered sample (`pushed` if none); the newest delivered one
+    /// is the one before it, still in its slot (the ring never holds more than
+    /// `RING_MASK` pending samples, so it is not overwritten), which spares a copy of
+    /// it on every delivery.
     delivered: u64,
-    latest: Option<Sample<N>>,
 }
 
 impl<const N: usize> Latency<N> {
@@ -293,7 +350,6 @@ impl<const N: usize> Latency<N> {
                 .expect("a ring of RING_SLOTS slots"),
             pushed: 0,
             delivered: 0,
-            latest: None,
         }
     }
 
@@ -308,46 +364,174 @@ impl<const N: usize> Latency<N> {
 }
 
 impl<const N: usize> Delay<N> for Latency<N> {
-    #[inline]
+    #[inline(always)]
     fn push(&mut self, t_s: f64, sample: Sample<N>) {
         debug_assert_eq!(
             sample.seq, self.pushed as u32,
             "consecutive sequence numbers"
         );
-        if self.pushed - self.delivered > RING_MASK {
-            self.delivered += 1; // full (samples far faster than frames): drop the oldest
+        if self.pushed - self.delivered >= RING_MASK {
+            // full (samples far faster than frames): drop the oldest, keeping the slot of
+            // the newest delivered one
+            self.delivered += 1;
         }
         self.pending[(self.pushed & RING_MASK) as usize] = (t_s + self.latency_s, sample.values);
         self.pushed += 1;
     }
 
-    #[inline]
+    #[inline(always)]
     fn latest(&mut self, t_s: f64) -> Option<Sample<N>> {
-        // deliver everything due by now (with slack for the rounding of t); the newest of
-        // them is returned as it is stored, not read back from `self.latest`
+        // deliver everything due by now (with slack for the rounding of t)
         let due_by = t_s + TIME_SLACK_S;
-        let before = self.delivered;
-        while self.delivered < self.pushed {
-            if self.pending[(self.delivered & RING_MASK) as usize].0 > due_by {
-                break;
-            }
-            self.delivered += 1;
+        let mut d = self.delivered;
+        while d < self.pushed && self.pending[(d & RING_MASK) as usize].0 <= due_by {
+            d += 1;
         }
-        if self.delivered > before {
-            let newest = self.at(self.delivered - 1);
-            self.latest = Some(newest);
-            return Some(newest);
-        }
-        match self.latest {
-            Some(s) => Some(s),
-            None if self.delivered < self.pushed => Some(self.at(self.delivered)),
-            None => None,
+        self.delivered = d;
+        if d > 0 {
+            Some(self.at(d - 1))
+        } else if self.pushed > 0 {
+            Some(self.at(0))
+        } else {
+            None
         }
     }
 
     fn latency_s(&self) -> f64 {
         self.latency_s
     }
+}
+
+/// A sample is visible `latency_s` after it was taken, for samples taken one at each
+/// control step `k`, at `index_time_s(k, period_s)` ([`AtControlSteps`]): the frame of step
+/// `k` carries sample `k - L`, read from its slot, the sample [`Latency`] would find by
+/// comparing times (`L` and why: [`StepLatency::new`]). Only the values are kept; with
+/// one sample a step and `L` of them in flight the ring never fills.
+#[derive(Clone, Debug)]
+pub struct StepLatency<const N: usize> {
+    latency_s: f64,
+    period_s: f64,
+    /// `L`, steps.
+    lag: u64,
+    /// Frames while at most this many samples have been pushed (steps up to `T`, below)
+    /// carry sample `k - L`; later frames compare times ([`Self::by_time`]).
+    exact_while_pushed: u64,
+    /// Sample `j`'s values in slot `j & RING_MASK`.
+    values: Box<[[f64; N]; RING_SLOTS]>,
+    /// Samples pushed.
+    pushed: u64,
+    /// After the exact steps: the oldest sample not yet delivered.
+    delivered: u64,
+}
+
+impl<const N: usize> StepLatency<N> {
+    /// A delay of `latency_s` (s, >= 0) for one sample at every control step of period
+    /// `period_s` (s, > 0), sample `j` taken at `index_time_s(j, period_s)`: the frame at
+    /// step `k` carries sample `k - L`, `L = ceil((latency_s - slack) / period_s)`, exactly
+    /// the sample [`Latency`]'s comparison of times gives.
+    ///
+    /// Why exactly (`dt` the period, `slack` 1e-9 s, `eps` = f64::EPSILON): sample `j` is
+    /// due at step `k` when `fl(fl(j dt) + latency)` is at most `fl(fl(k dt) + slack)`. Up to
+    /// time `T` each side is within `2 eps (T + latency + 1)` of its exact value (two
+    /// roundings of at most half an ulp each), so the comparison is the exact one,
+    /// `(k - j) dt >= latency - slack`, whenever the exact sides differ by more than
+    /// `4 eps (T + latency + 1)`. For `k - j = L` they differ by `L dt - (latency - slack)`,
+    /// at least 0; for `k - j = L - 1` by `(latency - slack) - (L - 1) dt`, above 0. So up
+    /// to `T = min(both) / (8 eps) - latency - 1` (twice the bound, for the rounding of the
+    /// two differences themselves) sample `k - L` is due at step `k` and `k - L + 1` is not.
+    /// Later steps (after some 5.6e5 s for 4 ms at 1 kHz, whose margin is the slack) and a
+    /// latency within rounding of a whole number of periods (a negative `T`) compare the
+    /// times.
+    pub fn new(latency_s: f64, period_s: f64) -> Self {
+        let delay = latency_s - TIME_SLACK_S;
+        let lag = (delay / period_s).ceil().max(0.0);
+        let above = lag * period_s - delay;
+        let below = delay - (lag - 1.0) * period_s;
+        let until = above.min(below) / (8.0 * f64::EPSILON) - latency_s - 1.0;
+        let exact = until.is_finite() && until >= 0.0 && above >= 0.0 && below > 0.0;
+        Self {
+            latency_s,
+            period_s,
+            lag: lag as u64,
+            exact_while_pushed: if exact {
+                last_step_by(until, period_s) + 1
+            } else {
+                0
+            },
+            values: vec![[0.0; N]; RING_SLOTS]
+                .into_boxed_slice()
+                .try_into()
+                .expect("a ring of RING_SLOTS slots"),
+            pushed: 0,
+            delivered: 0,
+        }
+    }
+
+    /// Sample `index` (still in the ring).
+    #[inline(always)]
+    fn at(&self, index: u64) -> Sample<N> {
+        Sample {
+            seq: index as u32,
+            values: self.values[(index & RING_MASK) as usize],
+        }
+    }
+
+    /// The newest sample due at `t_s` by comparing times, as [`Latency`] does (sample `j`
+    /// is due at `index_time_s(j, period_s) + latency_s`): the frames after
+    /// `T`, each of which delivers what the steps before left.
+    #[cold]
+    #[inline(never)]
+    fn by_time(&mut self, t_s: f64) -> Sample<N> {
+        let due_by = t_s + TIME_SLACK_S;
+        let mut d = self
+            .delivered
+            .max((self.pushed - 1).saturating_sub(self.lag));
+        while d < self.pushed && index_time_s(d, self.period_s) + self.latency_s <= due_by {
+            d += 1;
+        }
+        self.delivered = d;
+        self.at(d.saturating_sub(1))
+    }
+}
+
+impl<const N: usize> Delay<N> for StepLatency<N> {
+    #[inline(always)]
+    fn push(&mut self, t_s: f64, sample: Sample<N>) {
+        debug_assert_eq!(t_s, index_time_s(self.pushed, self.period_s));
+        debug_assert_eq!(sample.seq, self.pushed as u32);
+        self.values[(self.pushed & RING_MASK) as usize] = sample.values;
+        self.pushed += 1;
+    }
+
+    /// The step's own sample has just been pushed (samples at control steps): step `k` is
+    /// the one with `k + 1` pushed.
+    #[inline(always)]
+    fn latest(&mut self, t_s: f64) -> Option<Sample<N>> {
+        debug_assert!(self.pushed > 0);
+        debug_assert_eq!(t_s, index_time_s(self.pushed - 1, self.period_s));
+        Some(if self.pushed <= self.exact_while_pushed {
+            self.at((self.pushed - 1).saturating_sub(self.lag))
+        } else {
+            self.by_time(t_s)
+        })
+    }
+
+    fn latency_s(&self) -> f64 {
+        self.latency_s
+    }
+}
+
+/// The last step `k` whose time `index_time_s(k, period_s)` is at most `t_s` (s, >= 0;
+/// `period_s` > 0).
+fn last_step_by(t_s: f64, period_s: f64) -> u64 {
+    let mut k = (t_s / period_s).min(9.0e15) as u64;
+    while k > 0 && index_time_s(k, period_s) > t_s {
+        k -= 1;
+    }
+    while k < 9_000_000_000_000_000 && index_time_s(k + 1, period_s) <= t_s {
+        k += 1;
+    }
+    k
 }
 
 /// A sensor of `N` values: its clock, what it measures, its delay (module docs).
@@ -384,7 +568,7 @@ impl<const N: usize, C: Clock, M: Measure<N>, D: Delay<N>> Sampled<N, C, M, D> {
 
     /// The sample a control frame at `t_s` carries (taking the step's sample of `truth`
     /// first when the sensor samples at control steps).
-    #[inline]
+    #[inline(always)]
     pub fn deliver(&mut self, t_s: f64, truth: [f64; N]) -> Option<Sample<N>> {
         if self.clock.at_control_steps() {
             self.take(t_s, truth);
@@ -401,6 +585,10 @@ impl<const N: usize, C: Clock, M: Measure<N>, D: Delay<N>> Sampled<N, C, M, D> {
 
 /// The line juggler's ball sensor: sample events inside the plant, frames at control steps.
 pub trait Sensor {
+    /// True if the sensor samples only at control steps (then
+    /// [`next_sample_time_s`](Sensor::next_sample_time_s) is always infinite): known from the
+    /// type, so a loop skips the sample-time tests.
+    fn at_control_steps(&self) -> bool;
     /// Time of the next sample, s (infinite if the sensor samples only at control steps).
     fn next_sample_time_s(&self) -> f64;
     /// Take the sample due at `t_s` of the true height `height_m` (m).
@@ -412,6 +600,10 @@ pub trait Sensor {
 
 impl<C: Clock, M: Measure<1>, D: Delay<1>> Sensor for Sampled<1, C, M, D> {
     #[inline(always)]
+    fn at_control_steps(&self) -> bool {
+        self.clock.at_control_steps()
+    }
+    #[inline(always)]
     fn next_sample_time_s(&self) -> f64 {
         Sampled::next_sample_time_s(self)
     }
@@ -421,7 +613,7 @@ impl<C: Clock, M: Measure<1>, D: Delay<1>> Sensor for Sampled<1, C, M, D> {
     fn sample(&mut self, t_s: f64, height_m: f64) {
         self.take(t_s, [height_m]);
     }
-    #[inline]
+    #[inline(always)]
     fn frame(&mut self, _step: u64, t_s: f64, height_m: f64) -> (u32, f32) {
         self.deliver(t_s, [height_m])
             .map_or((0, f32::NAN), |s| (s.seq, s.values[0] as f32))
@@ -434,6 +626,11 @@ pub type PerfectSensor = Sampled<1, AtControlSteps, Exact, NoLatency<1>>;
 /// The ball height sampled at a rate with noise, quantization and latency.
 pub type SampledSensor = Sampled<1, Periodic, Measured<1>, Latency<1>>;
 
+/// The ball height sampled at every control step with noise, quantization and latency: a
+/// [`SampledSensor`] whose rate is the control rate, without scheduling its samples as
+/// plant events or comparing delivery times.
+pub type SteppedSensor = Sampled<1, AtControlSteps, Measured<1>, StepLatency<1>>;
+
 impl SampledSensor {
     /// A sensor sampling at `rate_hz` (> 0) with noise `sigma_m` (m), latency `latency_s`
     /// (s) and quantization `quantization_m` (m, 0 = none), reproducible from `seed`.
@@ -442,6 +639,26 @@ impl SampledSensor {
             Periodic::new(rate_hz),
             Measured::new([sigma_m], [quantization_m], seed),
             Latency::new(latency_s),
+        )
+    }
+}
+
+impl SteppedSensor {
+    /// A sensor sampling at every control step of period `period_s` (s, > 0) with noise
+    /// `sigma_m` (m), latency `latency_s` (s) and quantization `quantization_m` (m, 0 =
+    /// none), reproducible from `seed`: the samples of [`SampledSensor::new`] at rate
+    /// `1 / period_s`, bit for bit.
+    pub fn new(
+        period_s: f64,
+        sigma_m: f64,
+        latency_s: f64,
+        quantization_m: f64,
+        seed: u64,
+    ) -> Self {
+        Sampled::with(
+            AtControlSteps::default(),
+            Measured::new([sigma_m], [quantization_m], seed),
+            StepLatency::new(latency_s, period_s),
         )
     }
 }
@@ -590,6 +807,87 @@ mod tests {
         let a = one.measure([0.0])[0];
         let b = one.measure([0.0])[0];
         assert_eq!(z, [a, 5.0, b]);
+    }
+
+    /// Frames of `sensor` at `n` control steps of period `dt` over a moving truth, taking
+    /// the samples due first as the line plant does (those at the step itself).
+    fn frames<C: Clock, D: Delay<1>>(
+        mut sensor: Sampled<1, C, Measured<1>, D>,
+        dt: f64,
+        n: u64,
+    ) -> Vec<(u32, u32)> {
+        (0..n)
+            .map(|k| {
+                let t = index_time_s(k, dt);
+                let h = (k as f64 * 0.37).sin();
+                while sensor.next_sample_time_s() <= t {
+                    sensor.sample(t, h);
+                }
+                let (seq, z) = sensor.frame(k, t, h);
+                (seq, z.to_bits())
+            })
+            .collect()
+    }
+
+    /// The stepped sensor gives the frames of the sampled sensor at the control rate, bit
+    /// for bit: latencies that are whole periods, that are not, within the slack of a whole
+    /// period (above and below), zero, and longer than a hundred periods.
+    #[test]
+    fn the_stepped_sensor_is_the_sampled_sensor_at_the_control_rate() {
+        for (rate, latency) in [
+            (1000.0, 0.004),
+            (500.0, 0.004),
+            (1000.0, 0.0045),
+            (1000.0, 0.004 + 1e-9),
+            (1000.0, 0.004 - 5e-10),
+            (1000.0, 0.004 + 2e-9),
+            (1000.0, 0.0),
+            (333.0, 0.31),
+            (1000.0, 1e-10),
+        ] {
+            let dt = 1.0 / rate;
+            let sampled = SampledSensor::new(rate, 0.001, latency, 1e-4, 5);
+            let stepped = SteppedSensor::new(dt, 0.001, latency, 1e-4, 5);
+            assert_eq!(
+                frames(sampled, dt, 3000),
+                frames(stepped, dt, 3000),
+                "rate {rate}, latency {latency}"
+            );
+        }
+    }
+
+    /// Past the steps where the lag is proven (forced to the first few here), the stepped
+    /// sensor compares times as the sampled sensor does, with the same frames; and where
+    /// the latency is within rounding of a whole number of periods it compares them from
+    /// the start.
+    #[test]
+    fn the_stepped_sensor_compares_times_where_the_lag_is_not_proven() {
+        for (latency, proven) in [(0.004, 0), (0.004, 7), (0.0045, 1), (0.31, 200)] {
+            let (rate, dt) = (1000.0, 1e-3);
+            let mut stepped = SteppedSensor::new(dt, 0.001, latency, 1e-4, 5);
+            stepped.delay.exact_while_pushed = proven;
+            let sampled = SampledSensor::new(rate, 0.001, latency, 1e-4, 5);
+            assert_eq!(frames(sampled, dt, 2000), frames(stepped, dt, 2000));
+        }
+        // 4 ms at 1 kHz: the margin is the slack, 1e-9 s, proven for some 5.6e5 s
+        let lag = StepLatency::<1>::new(0.004, 1e-3);
+        assert_eq!(lag.lag, 4);
+        let proven_s = lag.exact_while_pushed as f64 * 1e-3;
+        assert!((5.0e5..6.0e5).contains(&proven_s), "{proven_s}");
+        // a latency within rounding of four periods and the slack: nothing is proven
+        let at_the_edge = StepLatency::<1>::new(0.004 + 1e-9, 1e-3);
+        assert_eq!(at_the_edge.exact_while_pushed, 0);
+    }
+
+    /// Normals drawn a block at a time are the ones drawn one at a time.
+    #[test]
+    fn normals_from_the_block_are_the_draws_in_order() {
+        let mut block = NormalBlock::new(17);
+        let mut rng = NoiseRng::seed_from_u64(17);
+        for _ in 0..3 * NORMAL_BLOCK + 5 {
+            let want: f64 = StandardNormal.sample(&mut rng);
+            assert_eq!(block.draw().to_bits(), want.to_bits());
+        }
     }
 
     #[test]
