@@ -74,20 +74,22 @@ where
 {
     let mut safe = SafeSteps::default();
     let mut end = None;
+    let mut t_k = P::time_s(0, dt_s);
     for k in 0..max_steps {
         if let Some(e) = plant.done() {
             end = Some(e);
             break;
         }
-        let t_k = P::time_s(k, dt_s);
         let frame = plant.frame(k, t_k);
         let command = ctrl.command(&frame)?;
-        safe.record(&command);
         plant.apply(k, t_k, &command);
-        if let ControlFlow::Break(e) = plant.advance(k, P::time_s(k + 1, dt_s))? {
+        safe.record(&command);
+        let t_next = P::time_s(k + 1, dt_s);
+        if let ControlFlow::Break(e) = plant.advance(k, t_next)? {
             end = Some(e);
             break;
         }
+        t_k = t_next;
     }
     Ok(Driven { end, safe })
 }

@@ -29,6 +29,68 @@ pub trait Actuator {
     }
     /// Snap the state onto the limit that was just reached (removes rounding).
     fn settle(&self, paddle: &mut PaddleState<f64>);
+    /// The paddle states from which no limit ends a regime within `max_window_s` (s),
+    /// whatever acceleration [`accel`](Actuator::accel) gave it: a cheap test for a loop
+    /// whose segments mostly outlast nothing. [`QuietBox::NEVER`] by default.
+    fn quiet_box(&self, max_window_s: f64) -> QuietBox {
+        let _ = max_window_s;
+        QuietBox::NEVER
+    }
+    /// The acceleration for `command_mps2` where no limit blocks it (a state in the
+    /// [`QuietBox`]): [`accel`](Actuator::accel) there, in fewer tests.
+    fn unblocked_accel(&self, command_mps2: f64) -> f64;
+}
+
+/// Relative margin of a [`QuietBox`] against the limits: a thousand times the margin of
+/// [`SecondOrderActuator`]'s own out-of-reach tests, so that rounding in either cannot make
+/// the box hold a state those tests would not clear.
+const QUIET_MARGIN: f64 = 1e-6;
+
+/// Paddle states (speed and height) from which an actuator's regime provably outlasts any
+/// segment of at most `max_window_s` (s): where [`holds`](QuietBox::holds) is true,
+/// [`Actuator::time_to_switch_within`] is at least the segment, and
+/// [`Actuator::accel`] is [`Actuator::unblocked_accel`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuietBox {
+    /// Largest speed, m/s.
+    pub max_speed_mps: f64,
+    /// Lowest height, m.
+    pub min_height_m: f64,
+    /// Highest height, m.
+    pub max_height_m: f64,
+    /// Longest segment, s.
+    pub max_window_s: f64,
+    /// Largest acceleration magnitude the actuator gives, m/s^2.
+    pub max_accel_mps2: f64,
+}
+
+impl QuietBox {
+    /// Holds no state (an actuator without a cheap bound).
+    pub const NEVER: Self = Self {
+        max_speed_mps: -1.0,
+        min_height_m: f64::INFINITY,
+        max_height_m: f64::NEG_INFINITY,
+        max_window_s: -1.0,
+        max_accel_mps2: f64::INFINITY,
+    };
+    /// Holds every finite state (an actuator without limits).
+    pub const ALWAYS: Self = Self {
+        max_speed_mps: f64::INFINITY,
+        min_height_m: f64::NEG_INFINITY,
+        max_height_m: f64::INFINITY,
+        max_window_s: f64::INFINITY,
+        max_accel_mps2: f64::INFINITY,
+    };
+
+    /// True if `p` is in the box: its regime outlasts any segment of at most
+    /// `max_window_s`, and no limit blocks an acceleration there. Non-finite states are
+    /// outside.
+    #[inline(always)]
+    pub fn holds(&self, p: &PaddleState<f64>) -> bool {
+        p.velocity_mps.abs() <= self.max_speed_mps
+            && p.height_m >= self.min_height_m
+            && p.height_m <= self.max_height_m
+    }
 }
 
 /// The paddle's acceleration is the command, without limits.
@@ -46,6 +108,13 @@ impl Actuator for IdealActuator {
     }
     #[inline]
     fn settle(&self, _: &mut PaddleState<f64>) {}
+    fn quiet_box(&self, _: f64) -> QuietBox {
+        QuietBox::ALWAYS
+    }
+    #[inline]
+    fn unblocked_accel(&self, command_mps2: f64) -> f64 {
+        command_mps2
+    }
 }
 
 /// A driven paddle mass (second order) with a force limit per unit mass, a speed limit
@@ -141,14 +210,7 @@ impl Actuator for SecondOrderActuator {
     /// per SIL step.
     #[inline]
     fn accel(&self, p: &PaddleState<f64>, command_mps2: f64) -> f64 {
-        let a_max = self.accel_max_mps2;
-        let a = if command_mps2.abs() <= a_max {
-            command_mps2
-        } else if command_mps2.is_finite() {
-            a_max.copysign(command_mps2)
-        } else {
-            0.0
-        };
+        let a = self.unblocked_accel(command_mps2);
         let blocked = if a > 0.0 {
             (p.height_m >= self.max_height_m && p.velocity_mps >= 0.0)
                 || p.velocity_mps >= self.velocity_max_mps
@@ -162,6 +224,19 @@ impl Actuator for SecondOrderActuator {
             0.0
         } else {
             a
+        }
+    }
+
+    /// The command within the force limit (0 if not finite).
+    #[inline]
+    fn unblocked_accel(&self, command_mps2: f64) -> f64 {
+        let a_max = self.accel_max_mps2;
+        if command_mps2.abs() <= a_max {
+            command_mps2
+        } else if command_mps2.is_finite() {
+            a_max.copysign(command_mps2)
+        } else {
+            0.0
         }
     }
 
@@ -198,6 +273,32 @@ impl Actuator for SecondOrderActuator {
             p.velocity_mps = 0.0;
         }
         p.height_m = p.height_m.clamp(self.min_height_m, self.max_height_m);
+    }
+
+    /// With the acceleration within the force limit `a` and a segment of at most `W`, a
+    /// paddle at speed `|v| <= V = v_max (1 - m) - a W` stays below `v_max (1 - m)` and
+    /// travels at most `D = W (V + a W / 2)`; with its height at least `D (1 + m)` from
+    /// either stop neither limit is within reach, by `m` = 1e-6 relative where
+    /// [`speed_limit_out_of_reach`](Self::speed_limit_out_of_reach) and
+    /// [`stops_out_of_reach`](Self::stops_out_of_reach) ask for 1e-9: so those tests
+    /// clear every state in the box and the regime outlasts the segment. Empty
+    /// ([`QuietBox::NEVER`]) when the limits leave no such state.
+    fn quiet_box(&self, max_window_s: f64) -> QuietBox {
+        let (a, w) = (self.accel_max_mps2, max_window_s);
+        let v = self.velocity_max_mps * (1.0 - QUIET_MARGIN) - a * w;
+        let d = w * (v + 0.5 * a * w) * (1.0 + QUIET_MARGIN);
+        let (lo, hi) = (self.min_height_m + d, self.max_height_m - d);
+        if v >= 0.0 && lo <= hi && w > 0.0 && d.is_finite() {
+            QuietBox {
+                max_speed_mps: v,
+                min_height_m: lo,
+                max_height_m: hi,
+                max_window_s: w,
+                max_accel_mps2: a,
+            }
+        } else {
+            QuietBox::NEVER
+        }
     }
 }
 
@@ -236,6 +337,68 @@ mod tests {
                 prop_assert!(fast >= within, "{} < {} (full {})", fast, within, full);
             }
         }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+        /// A state in the quiet box outlasts every segment up to the box's window, whatever
+        /// acceleration the actuator gives (the full computation says so), and no limit
+        /// blocks a command there. States cover the box and its edges.
+        #[test]
+        fn quiet_box_states_outlast_the_window_and_are_not_blocked(
+            (a_max, v_max) in (1.0f64..500.0, 0.5f64..10.0),
+            window in 1e-5f64..5e-3,
+            (fh, fv, fa, fw) in (0.0f64..=1.0, -1.0f64..=1.0, -1.0f64..=1.0, 0.0f64..=1.0),
+            command in -1e3f64..1e3,
+        ) {
+            let act = SecondOrderActuator {
+                accel_max_mps2: a_max,
+                velocity_max_mps: v_max,
+                min_height_m: -0.35,
+                max_height_m: 0.15,
+            };
+            let q = act.quiet_box(window);
+            prop_assume!(q.max_window_s > 0.0);
+            let p = PaddleState::new(
+                q.min_height_m + fh * (q.max_height_m - q.min_height_m),
+                fv * q.max_speed_mps,
+            );
+            prop_assert!(q.holds(&p));
+            let w = fw.max(1e-9) * q.max_window_s;
+            let a = fa * a_max;
+            prop_assert!(act.time_to_switch_within(&p, a, w) >= w);
+            prop_assert!(act.time_to_switch(&p, a) >= w);
+            prop_assert_eq!(act.accel(&p, command).to_bits(), act.unblocked_accel(command).to_bits());
+        }
+    }
+
+    /// By hand: 250 m/s^2, 4 m/s, travel [-0.35, 0.15] m, 1 ms: speed up to
+    /// 4 (1 - 1e-6) - 0.25 = 3.749996 m/s, heights 1 ms (3.749996 + 0.125) m/s (1 + 1e-6)
+    /// = 3.875 mm inside either stop; an actuator whose limits leave no such state has an
+    /// empty box.
+    #[test]
+    fn the_quiet_box_by_hand() {
+        let act = SecondOrderActuator {
+            accel_max_mps2: 250.0,
+            velocity_max_mps: 4.0,
+            min_height_m: -0.35,
+            max_height_m: 0.15,
+        };
+        let q = act.quiet_box(1e-3);
+        assert!((q.max_speed_mps - 3.749_996).abs() < 1e-12);
+        let d = 1e-3 * (3.749_996 + 0.125) * (1.0 + 1e-6);
+        assert!((q.min_height_m - (-0.35 + d)).abs() < 1e-12);
+        assert!((q.max_height_m - (0.15 - d)).abs() < 1e-12);
+        assert!(!q.holds(&PaddleState::new(0.0, 3.75)));
+        assert!(!q.holds(&PaddleState::new(0.15 - 0.003, 0.0)));
+        assert!(q.holds(&PaddleState::new(0.15 - 0.004, -3.7)));
+        assert!(!q.holds(&PaddleState::new(f64::NAN, 0.0)));
+        assert_eq!(
+            act.quiet_box(0.02),
+            QuietBox::NEVER,
+            "250 m/s^2 for 20 ms passes 4 m/s"
+        );
+        assert_eq!(IdealActuator.quiet_box(1e-3), QuietBox::ALWAYS);
     }
 
     fn act() -> SecondOrderActuator {

@@ -13,4 +13,4 @@ pub mod roots;
 pub mod unimodal;
 pub mod zeno;
 
-pub use flight::{Ballistic, Flight, FlightEnd, Poly};
+pub use flight::{Ballistic, Flight, FlightEnd, PaddleBound, Poly};

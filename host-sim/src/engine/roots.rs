@@ -139,6 +139,28 @@ pub fn clearly_apart(c0: f64, c1: f64, c2: f64, h: f64) -> bool {
     lower > CLEAR_GAP * (c0 + linear.abs() + quadratic.abs())
 }
 
+/// Margin of [`apart_by_margin`]: a thousand times [`CLEAR_GAP`], so rounding in either
+/// test cannot make it answer true where [`clearly_apart`] answers false.
+const APART_MARGIN: f64 = 1e-6;
+
+/// True if `c0 + c1 t + c2 t^2` stays above zero on `[0, h]` (`h >= 0`) by a wide margin:
+/// `c0 (1 - 1e-6) > |c1| h + |c2| h^2`. A cheaper, stricter form of [`clearly_apart`] for a
+/// loop that takes most segments without a contact: where it is true, so is
+/// `clearly_apart` (the gap's lower bound `c0 - |c1| h - |c2| h^2` is then above
+/// `1e-6 c0`, while `clearly_apart` asks for `1e-9 (c0 + |c1| h + |c2| h^2) < 2e-9 c0`;
+/// rounding moves either side by a few ulps of `c0`). Non-finite input gives false.
+#[inline(always)]
+pub fn apart_by_margin(c0: f64, c1: f64, c2: f64, h: f64) -> bool {
+    apart_by_margin_of(c0, c1.abs(), c2.abs() * h, h)
+}
+
+/// [`apart_by_margin`] given `|c1|` and `|c2| h` (a loop whose `h` is fixed computes the
+/// product once): the same test, rounding for rounding.
+#[inline(always)]
+pub fn apart_by_margin_of(c0: f64, c1_abs: f64, c2_abs_h: f64, h: f64) -> bool {
+    c0 * (1.0 - APART_MARGIN) > h * (c1_abs + c2_abs_h)
+}
+
 /// The positive root of `c0 + c1 t + c2 t^2` for `c0 <= 0` tiny, `c1 > 0`, `c2 < 0`.
 fn second_root_from_touch(c0: f64, c1: f64, c2: f64) -> f64 {
     if c0 == 0.0 {
@@ -176,6 +198,45 @@ fn polish(c0: f64, c1: f64, c2: f64, t: f64, h: f64) -> f64 {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(20000))]
+        /// Where the wide margin holds, so does the short test's (and the roots find no
+        /// contact): gaps from touching to far, both signs of the linear and quadratic
+        /// terms, segments up to a second, at the wide margin's edge.
+        #[test]
+        fn the_wide_margin_implies_clearly_apart(
+            c0_exp in -12.0f64..3.0,
+            c1 in -100.0f64..100.0,
+            c2 in -500.0f64..500.0,
+            h_exp in -7.0f64..0.0,
+            edge in 0.0f64..=1.0,
+        ) {
+            let h = 10f64.powf(h_exp);
+            // from anywhere, or at the wide margin's boundary
+            let need = h * (c1.abs() + c2.abs() * h) / (1.0 - 1e-6);
+            let c0 = if edge < 0.5 { 10f64.powf(c0_exp) } else { need * (1.0 + (edge - 0.75) * 1e-12) };
+            if apart_by_margin(c0, c1, c2, h) {
+                prop_assert!(clearly_apart(c0, c1, c2, h));
+                prop_assert!(first_contact(c0, c1, c2, h).is_none());
+            }
+        }
+    }
+
+    #[test]
+    fn the_wide_margin_by_hand() {
+        // 1 m above, closing at 10 m/s, 1 ms: 1 (1 - 1e-6) > 0.01 + ...
+        assert!(apart_by_margin(1.0, -10.0, -4.9, 1e-3));
+        // 1 cm above, closing at 10 m/s over 1 ms: 0.01 (1 - 1e-6) < 0.01 + 4.9e-6
+        assert!(!apart_by_margin(0.01, -10.0, -4.9, 1e-3));
+        assert!(!apart_by_margin(0.0, 0.0, 0.0, 1e-3), "touching");
+        assert!(!apart_by_margin(f64::NAN, 0.0, 0.0, 1e-3));
+        assert!(!apart_by_margin(1.0, f64::INFINITY, 0.0, 1e-3));
+        assert_eq!(
+            apart_by_margin(0.5, -3.0, 2.0, 0.01),
+            apart_by_margin_of(0.5, 3.0, 2.0 * 0.01, 0.01)
+        );
+    }
 
     #[test]
     fn falling_ball_on_fixed_table() {

@@ -129,6 +129,51 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
         self.advance_segments(t_end_s, max_impacts, MAX_SEGMENTS_PER_CALL, on_impact)
     }
 
+    /// Advance to `t_end_s` in one closed-form flight if that is provably all that happens;
+    /// true if it did. Otherwise false, with the plant untouched: the caller takes the
+    /// general path ([`advance_to`](Self::advance_to)). "Provably": the ball is not
+    /// resting; the surface is calm ([`Surface::calm`]: its regime outlasts any segment up
+    /// to the bound's window, so no limit splits this one) and its speed and acceleration
+    /// are bounded; the flight model clears the ball of any paddle within that bound over
+    /// the window ([`Flight::clear_flight`]: a closed-form flight, no contact). Then
+    /// [`advance_to`](Self::advance_to) takes the window as one segment that reaches its
+    /// end, and flies it as this does, operation for operation (a property test:
+    /// `tests::quiet_periods_are_the_general_loops`). A control period in the SIL loop is
+    /// almost always one of these (BENCHMARKS.md, "SIL at 1 kHz").
+    #[inline(always)]
+    pub fn quiet_to(&mut self, t_end_s: f64) -> bool {
+        if !Self::QUIET_PERIODS || self.resting {
+            return false;
+        }
+        let Some(bound) = self.surface.calm() else {
+            return false;
+        };
+        let window = t_end_s - self.time_s;
+        if !(window > 0.0 && window <= bound.window_s) {
+            return false;
+        }
+        let poly = self.surface.poly();
+        let (f, g) = (&self.flight, self.gravity_mps2);
+        // the bound first (a test on constants); the segment's own coefficients where it is
+        // too wide (near the paddle, or an actuator without limits)
+        let cleared = f
+            .clear_flight(&self.ball, poly.height_m, &bound, window, g)
+            .or_else(|| f.clear_flight_of(&self.ball, &poly, window, g));
+        match cleared {
+            Some(ball) => {
+                self.ball = ball;
+                self.surface.advance(window, false);
+                self.time_s = t_end_s;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// True if [`quiet_to`](Self::quiet_to) can advance this plant (a closed-form flight
+    /// over a surface of short segments); false: it never does.
+    pub const QUIET_PERIODS: bool = S::SHORT_SEGMENTS && F::CLOSED_FORM;
+
     /// As [`advance_to`](Self::advance_to), with at most `max_segments` flight segments
     /// ([`Advance::SegmentCap`] after them).
     #[inline(always)]
@@ -268,5 +313,88 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
             self.stick();
             self.come_to_rest(rest_time, false);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::effects::actuator::SecondOrderActuator;
+    use crate::effects::jitter::NoJitter;
+    use crate::engine::Ballistic;
+    use crate::model::surface::Actuated;
+    use proptest::prelude::*;
+
+    type Plant = LinePlant<Ballistic, Actuated<SecondOrderActuator>, NoJitter>;
+
+    fn plant(ball: (f64, f64), paddle: (f64, f64), command: f64, period: f64) -> Plant {
+        let act = SecondOrderActuator {
+            accel_max_mps2: 250.0,
+            velocity_max_mps: 4.0,
+            min_height_m: -0.35,
+            max_height_m: 0.15,
+        };
+        let mut surface = Actuated::new(act, paddle.0).quiet_for(period * (1.0 + 1e-6), 9.81);
+        surface.paddle.velocity_mps = paddle.1;
+        surface.command(command);
+        let zeno = ZenoPolicy {
+            velocity_threshold_mps: 1e-3,
+            relative_threshold: 1e-3,
+            max_impacts_per_segment: 1000,
+        };
+        let ball = BallState::new(ball.0, ball.1);
+        LinePlant::new(9.81, 0.8, Ballistic, surface, NoJitter, zeno, ball)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(20000))]
+        /// Where a period is quiet, the general loop takes it as one flight to its end, with
+        /// the same ball, paddle and time bit for bit and no event; states from the ball on
+        /// the paddle to far above, paddles at and past every limit, commands past the force
+        /// limit, late step times.
+        #[test]
+        fn quiet_periods_are_the_general_loops(
+            (gap, bv) in (-0.01f64..1.5, -8.0f64..8.0),
+            (ph, pv) in (-0.4f64..0.2, -4.5f64..4.5),
+            command in -400.0f64..400.0,
+            (period, k) in (prop_oneof![Just(1e-3), Just(2e-3), 1e-4f64..1e-2], 0u64..10_000_000),
+        ) {
+            let mut quiet = plant((ph + gap, bv), (ph, pv), command, period);
+            quiet.time_s = k as f64 * period;
+            let mut general = quiet.clone();
+            let t_end = (k + 1) as f64 * period;
+            if quiet.quiet_to(t_end) {
+                let end = general.advance_to(t_end, u64::MAX, &mut |_| panic!("an impact"));
+                prop_assert_eq!(end, Advance::Reached);
+                prop_assert_eq!(general.impacts, 0);
+                let bits = |p: &Plant| {
+                    let s = p.surface;
+                    [p.ball.height_m, p.ball.velocity_mps, s.paddle.height_m,
+                     s.paddle.velocity_mps, s.accel_mps2, p.time_s].map(f64::to_bits)
+                };
+                prop_assert_eq!(bits(&quiet), bits(&general));
+            }
+        }
+    }
+
+    /// By hand: a ball half a metre above a paddle at rest mid-travel is quiet for a 1 ms
+    /// period; on the paddle, or with the paddle at a stop or at its speed limit, it is not
+    /// (the general loop decides).
+    #[test]
+    fn a_period_is_quiet_only_clear_of_the_paddle_and_its_limits() {
+        let quiet =
+            |ball: (f64, f64), paddle: (f64, f64)| plant(ball, paddle, 10.0, 1e-3).quiet_to(1e-3);
+        assert!(quiet((0.5, -3.0), (-0.1, 0.5)));
+        assert!(!quiet((-0.1, -3.0), (-0.1, 0.5)), "on the paddle");
+        assert!(!quiet((0.5, -3.0), (0.15, 0.0)), "at the upper stop");
+        assert!(!quiet((0.5, -3.0), (-0.1, 4.0)), "at the speed limit");
+        let mut resting = plant((0.5, -3.0), (-0.1, 0.5), 10.0, 1e-3);
+        resting.resting = true;
+        assert!(!resting.quiet_to(1e-3));
+        let mut long = plant((0.5, -3.0), (-0.1, 0.5), 10.0, 1e-3);
+        assert!(!long.quiet_to(2e-3), "longer than the box's period");
+        let mut moved = plant((0.5, -3.0), (-0.1, 0.5), 10.0, 1e-3);
+        moved.surface.advance(1e-4, false);
+        assert!(!moved.quiet_to(1e-3), "the paddle moved since its command");
     }
 }

@@ -1,8 +1,8 @@
 //! What the ball hits: a fixed table, the paper's ideal mirror paddle, or an actuated
 //! paddle driven by a controller's acceleration commands.
 
-use crate::effects::actuator::Actuator;
-use crate::engine::Poly;
+use crate::effects::actuator::{Actuator, QuietBox};
+use crate::engine::{PaddleBound, Poly};
 use dexter_core::mirror::MirrorLaw;
 use dexter_core::state::{BallState, PaddleState};
 
@@ -26,6 +26,14 @@ pub trait Surface {
     fn command(&mut self, accel_mps2: f64);
     /// True if a ball resting on this surface rests forever (nothing will throw it).
     fn rest_is_final(&self) -> bool;
+    /// If the current regime provably outlasts every segment up to the bound's window (a
+    /// cheap, conservative [`max_segment_s`](Surface::max_segment_s)`(w) >= w`): how fast
+    /// the surface moves and accelerates over such a segment. `None` if it cannot tell (by
+    /// default).
+    #[inline(always)]
+    fn calm(&self) -> Option<PaddleBound> {
+        None
+    }
     /// True if the plant's segments on this surface are short (a control period) and
     /// mostly end without a contact: the plant then asks the flight model to rule a
     /// contact out cheaply first ([`crate::engine::Flight::fly_short`]).
@@ -113,8 +121,15 @@ pub struct Actuated<A> {
     pub paddle: PaddleState<f64>,
     /// The last command, m/s^2.
     pub command_mps2: f64,
-    /// The acceleration the paddle has now, m/s^2.
+    /// The acceleration the paddle has now, m/s^2 (always the actuator's
+    /// [`Actuator::accel`], so within its force limit).
     pub accel_mps2: f64,
+    /// The states whose regime outlasts a control period ([`Self::quiet_for`]).
+    quiet: QuietBox,
+    /// What bounds the paddle from a state in `quiet`.
+    quiet_bound: PaddleBound,
+    /// The paddle was in `quiet` at the last command and has not moved since.
+    calm: bool,
 }
 
 impl<A: Actuator> Actuated<A> {
@@ -125,7 +140,25 @@ impl<A: Actuator> Actuated<A> {
             paddle: PaddleState::new(height_m, 0.0),
             command_mps2: 0.0,
             accel_mps2: 0.0,
+            quiet: QuietBox::NEVER,
+            quiet_bound: PaddleBound::new(f64::INFINITY, f64::INFINITY, 1.0, 0.0),
+            calm: false,
         }
+    }
+
+    /// Segments of at most `max_window_s` (s, the control period with its rounding) under
+    /// gravity `gravity_mps2` (m/s^2, > 0) are tested for a limit by the actuator's
+    /// [`QuietBox`] first ([`Surface::calm`]).
+    pub fn quiet_for(mut self, max_window_s: f64, gravity_mps2: f64) -> Self {
+        let q = self.actuator.quiet_box(max_window_s);
+        self.quiet = q;
+        self.quiet_bound = PaddleBound::new(
+            q.max_speed_mps,
+            q.max_accel_mps2,
+            gravity_mps2,
+            q.max_window_s,
+        );
+        self
     }
 
     /// A limit was reached: snap onto it and take the new regime's acceleration. Out of
@@ -150,13 +183,14 @@ impl<A: Actuator> Surface for Actuated<A> {
             accel_mps2: self.accel_mps2,
         }
     }
-    #[inline]
+    #[inline(always)]
     fn max_segment_s(&self, within_s: f64) -> f64 {
         self.actuator
             .time_to_switch_within(&self.paddle, self.accel_mps2, within_s)
     }
     #[inline]
     fn advance(&mut self, dt: f64, to_switch: bool) {
+        self.calm = false;
         let a = self.accel_mps2;
         self.paddle.height_m += dt * (self.paddle.velocity_mps + 0.5 * a * dt);
         self.paddle.velocity_mps += a * dt;
@@ -171,11 +205,22 @@ impl<A: Actuator> Surface for Actuated<A> {
     fn state(&self, _: &BallState<f64>) -> PaddleState<f64> {
         self.paddle
     }
+    /// In the quiet box no limit blocks the command: only the force limit applies.
+    #[inline(always)]
     fn command(&mut self, accel_mps2: f64) {
         self.command_mps2 = accel_mps2;
-        self.accel_mps2 = self.actuator.accel(&self.paddle, accel_mps2);
+        self.calm = self.quiet.holds(&self.paddle);
+        self.accel_mps2 = if self.calm {
+            self.actuator.unblocked_accel(accel_mps2)
+        } else {
+            self.actuator.accel(&self.paddle, accel_mps2)
+        };
     }
     fn rest_is_final(&self) -> bool {
         false
+    }
+    #[inline(always)]
+    fn calm(&self) -> Option<PaddleBound> {
+        self.calm.then_some(self.quiet_bound)
     }
 }

@@ -9,7 +9,7 @@ use super::scene::{ActuatorKind, ControlMode, Integrator, Scene};
 use crate::controller::{Sil, StepController};
 use crate::effects::actuator::{IdealActuator, SecondOrderActuator};
 use crate::effects::jitter::{GaussianJitter, Jitter, NoJitter};
-use crate::effects::sensor::{PerfectSensor, SampledSensor};
+use crate::effects::sensor::{PerfectSensor, SampledSensor, SteppedSensor};
 use crate::engine::drag::{DragFlight, Rk4, Rk45};
 use crate::engine::zeno::ZenoPolicy;
 use crate::engine::{Ballistic, Flight};
@@ -118,7 +118,8 @@ fn with_surface<F: Flight, J: Jitter>(
             let a = &s.actuator;
             match a.kind {
                 ActuatorKind::Ideal => {
-                    let surface = Actuated::new(IdealActuator, a.initial_height_m);
+                    let surface = Actuated::new(IdealActuator, a.initial_height_m)
+                        .quiet_for(quiet_window_s(s), s.physics.gravity_mps2);
                     with_sensor(s, o, c, rec, plant(s, flight, surface, jitter))?;
                 }
                 ActuatorKind::SecondOrder => {
@@ -128,13 +129,21 @@ fn with_surface<F: Flight, J: Jitter>(
                         min_height_m: a.min_height_m,
                         max_height_m: a.max_height_m,
                     };
-                    let surface = Actuated::new(act, a.initial_height_m);
+                    let surface = Actuated::new(act, a.initial_height_m)
+                        .quiet_for(quiet_window_s(s), s.physics.gravity_mps2);
                     with_sensor(s, o, c, rec, plant(s, flight, surface, jitter))?;
                 }
             }
         }
     }
     Ok(())
+}
+
+/// The longest control period of `s` with its rounding, s: a period's length `t_k+1 - t_k`
+/// differs from `1 / rate` by an ulp of `t`, 1e-6 relative until `t` is some 4e6 periods
+/// (a longer run takes its later periods through the general segment loop, as exactly).
+fn quiet_window_s(s: &Scene) -> f64 {
+    (1.0 + 1e-6) / s.control.rate_hz
 }
 
 fn with_sensor<F: Flight, S: Surface, J: Jitter>(
@@ -163,9 +172,15 @@ fn sensed<F: Flight, S: Surface, J: Jitter, C: StepController + ?Sized>(
         None => stepped_run(s, o, ctrl, plant, PerfectSensor::default(), rec),
         Some(x) => {
             let rate = x.rate_hz.unwrap_or(s.control.rate_hz);
-            let sensor =
-                SampledSensor::new(rate, x.noise_sigma_m, x.latency_s, x.quantization_m, x.seed);
-            stepped_run(s, o, ctrl, plant, sensor, rec)
+            let (sigma, latency, step) = (x.noise_sigma_m, x.latency_s, x.quantization_m);
+            if rate == s.control.rate_hz {
+                // the samples fall on the control steps: the same samples, taken there
+                let sensor = SteppedSensor::new(1.0 / rate, sigma, latency, step, x.seed);
+                stepped_run(s, o, ctrl, plant, sensor, rec)
+            } else {
+                let sensor = SampledSensor::new(rate, sigma, latency, step, x.seed);
+                stepped_run(s, o, ctrl, plant, sensor, rec)
+            }
         }
     }
 }

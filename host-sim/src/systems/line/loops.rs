@@ -217,9 +217,27 @@ struct Sampled<'r, 'a, F, S, J, Z> {
     /// The impact limit.
     total: u64,
     rec: &'r mut Recorder<'a>,
-    record_phase: bool,
+    /// The next step whose phase sample is recorded (`u64::MAX`: none), then every
+    /// `phase_every` steps: one comparison a step.
+    next_phase_step: u64,
     phase_every: u64,
     bar: &'r mut progress::Progress,
+}
+
+impl<F: Flight, S: Surface, J: Jitter, Z: Sensor> Sampled<'_, '_, F, S, J, Z> {
+    /// A period with events (a sample, a contact, a limit): the general path, out of line
+    /// so the quiet periods' loop keeps its registers.
+    #[inline(never)]
+    fn eventful_period(&mut self, t_next_s: f64) -> Result<bool, RunError> {
+        let (plant, sensor) = (&mut *self.plant, &mut *self.sensor);
+        advance_period(
+            plant,
+            sensor,
+            (t_next_s, self.samples),
+            self.total,
+            self.rec,
+        )
+    }
 }
 
 impl<F: Flight, S: Surface, J: Jitter, Z: Sensor> SampledPlant<Controller>
@@ -234,9 +252,13 @@ impl<F: Flight, S: Surface, J: Jitter, Z: Sensor> SampledPlant<Controller>
         index_time_s(k, dt_s)
     }
 
+    /// Only before the first step: a period that reaches the impact limit ends the run
+    /// from [`advance`](SampledPlant::advance) (every impact is counted against the limit
+    /// where it happens, [`LinePlant::advance_to`]), so no later step starts over it, and
+    /// the loop does not test it again.
     #[inline(always)]
     fn done(&self) -> Option<End> {
-        (self.plant.impacts >= self.total).then_some(End::Impacts)
+        None
     }
 
     /// The frame of control step `k` at `t_k_s`, after taking the samples due now.
@@ -244,7 +266,7 @@ impl<F: Flight, S: Surface, J: Jitter, Z: Sensor> SampledPlant<Controller>
     fn frame(&mut self, k: u64, t_k_s: f64) -> SensorFrame {
         let (plant, sensor) = (&*self.plant, &mut *self.sensor);
         // advance_period took every sample before t_k: at most the one at t_k is due
-        while sensor.next_sample_time_s() <= plant.time_s {
+        while !sensor.at_control_steps() && sensor.next_sample_time_s() <= plant.time_s {
             sensor.sample(plant.time_s, plant.ball.height_m);
         }
         let paddle = plant.surface.state(&plant.ball);
@@ -262,22 +284,38 @@ impl<F: Flight, S: Surface, J: Jitter, Z: Sensor> SampledPlant<Controller>
         self.plant
             .surface
             .command(f64::from(command.paddle_accel_mps2));
-        let phase = &mut self.rec.out.phase;
-        if self.record_phase
-            && k.is_multiple_of(self.phase_every)
-            && phase.len() < MAX_PHASE_SAMPLES
-        {
-            phase.push((self.plant.ball.height_m, self.plant.ball.velocity_mps));
+        if k == self.next_phase_step {
+            self.next_phase_step += self.phase_every;
+            let phase = &mut self.rec.out.phase;
+            if phase.len() < MAX_PHASE_SAMPLES {
+                phase.push((self.plant.ball.height_m, self.plant.ball.velocity_mps));
+            }
         }
     }
 
     #[inline(always)]
     fn advance(&mut self, k: u64, t_next_s: f64) -> Result<ControlFlow<End>, RunError> {
-        let (plant, sensor) = (&mut *self.plant, &mut *self.sensor);
-        let limit = (t_next_s, self.samples);
-        if advance_period(plant, sensor, limit, self.total, self.rec)? {
-            return Ok(ControlFlow::Break(End::Impacts));
+        if LinePlant::<F, S, J>::QUIET_PERIODS {
+            // most periods are quiet: their closed form inline, the rest out of line
+            let no_sample =
+                self.sensor.at_control_steps() || self.sensor.next_sample_time_s() >= t_next_s;
+            let quiet = no_sample && self.plant.quiet_to(t_next_s);
+            if !quiet && self.eventful_period(t_next_s)? {
+                return Ok(ControlFlow::Break(End::Impacts));
+            }
+        } else {
+            let (plant, sensor) = (&mut *self.plant, &mut *self.sensor);
+            if advance_period(
+                plant,
+                sensor,
+                (t_next_s, self.samples),
+                self.total,
+                self.rec,
+            )? {
+                return Ok(ControlFlow::Break(End::Impacts));
+            }
         }
+        let plant = &mut *self.plant;
         if k.is_multiple_of(1024) {
             // an impact the jitter made unphysical fails the run here (the ball left with
             // the paddle meanwhile): checked with the bar, so a step pays nothing for it
@@ -288,6 +326,11 @@ impl<F: Flight, S: Surface, J: Jitter, Z: Sensor> SampledPlant<Controller>
         }
         Ok(ControlFlow::Continue(()))
     }
+}
+
+/// True if `plant` has reached the impact limit `total`.
+fn plant_done<F: Flight, S: Surface, J: Jitter>(plant: &LinePlant<F, S, J>, total: u64) -> bool {
+    plant.impacts >= total
 }
 
 /// Fixed-rate run: a sensor frame at every control step, the command held for the period;
@@ -316,11 +359,20 @@ where
         samples: samples_per_period(s),
         total: s.stop.impacts,
         rec,
-        record_phase: o.record_phase,
+        next_phase_step: if o.record_phase { 0 } else { u64::MAX },
         phase_every: (max_steps / MAX_PHASE_SAMPLES as u64).max(1),
         bar: &mut pb,
     };
-    let driven = drive(ctrl, &mut run, dt, max_steps)?;
+    // a run whose impact limit is reached before it starts takes no step
+    let steps = if plant_done(run.plant, run.total) {
+        0
+    } else {
+        max_steps
+    };
+    let mut driven = drive(ctrl, &mut run, dt, steps)?;
+    if steps == 0 && max_steps > 0 {
+        driven.end = Some(End::Impacts);
+    }
     pb.finish();
     if J::ON && plant.jitter.unphysical().is_some() {
         return Err(unphysical(&plant));
