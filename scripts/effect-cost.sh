@@ -3,12 +3,12 @@
 # wall time on a shared machine). For every variant it runs `dexter` twice with different
 # run lengths and reports the marginal instructions per impact (event-driven scenes) or per
 # control step (SIL), so start-up and scene parsing cancel out.
-# Usage: scripts/effect-cost.sh   (needs valgrind; prints a markdown table)
+# Usage: scripts/effect-cost.sh [DEXTER_BINARY]   (needs valgrind; prints a markdown table;
+#   default: builds and uses the release CLI; pass another build, e.g. of an older commit)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 command -v valgrind >/dev/null || { echo "needs valgrind (apt-get install valgrind)" >&2; exit 1; }
-cargo build --release -q -p dexter-sim
-bin=target/release/dexter
+if [ $# -ge 1 ]; then bin=$1; else cargo build --release -q -p dexter-sim; bin=target/release/dexter; fi
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 
 ir() { valgrind --tool=callgrind --callgrind-out-file=/dev/null "$bin" run "$@" --json 2>&1 >/dev/null \
