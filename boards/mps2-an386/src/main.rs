@@ -28,6 +28,7 @@ use uart0 as mps2_an386;
 
 #[cfg(feature = "bench")]
 mod bench;
+mod mem;
 mod semihosting;
 mod smoke;
 mod systick;
