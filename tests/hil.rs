@@ -1364,24 +1364,40 @@ fn panic_and_hardfault_end_the_qemu_run_with_a_failure_status() {
     assert!(log.contains("ERROR HardFault at pc="), "{log}");
 }
 
-/// The stack sits below the statics (memory.x): running past its bottom faults on the
-/// unmapped memory under RAM instead of overwriting `.bss` silently, and the run fails.
+/// The stack sits below the statics (memory.x), and the MPU forbids every access to the
+/// 256 MiB below RAM (`boards/mps2-an386/src/fault.rs`: QEMU's mps2-an386 ignores writes
+/// there instead of faulting). Running past the stack's bottom faults at its first access
+/// instead of overwriting `.bss` or running on, the HardFault handler says it was a stack
+/// overflow, and the run ends with a failure status (not a lockup, and not a hang: before
+/// the guard, a build whose `memset` kept nothing on the stack recursed down into the code
+/// and spun there).
 #[test]
 fn a_stack_overflow_faults_instead_of_corrupting_the_statics() {
     let elf = firmware();
+    let bottom = Elf(std::fs::read(&elf).unwrap()).symbol("_stack_end");
+    assert_eq!(
+        bottom,
+        Some(0x2000_0000),
+        "the MPU guard ends at 0x2000_0000 (fault.rs, GUARD_END): memory.x must put the stack's bottom there"
+    );
     let out = qemu_semihosting(&elf, Some("fault-stack-overflow"));
     let (log, stderr) = (
         decode_defmt(&elf, &out.stdout),
         String::from_utf8_lossy(&out.stderr),
     );
-    assert!(!out.status.success(), "{:?}\n{log}", out.status);
-    assert!(!log.contains("without a fault"), "{log}");
-    // The fault cannot stack its exception frame either, so the core locks up (QEMU
-    // aborts with "Lockup"; a real part resets): either way the run ends as a failure.
-    assert!(
-        stderr.contains("Lockup") || log.contains("HardFault"),
-        "{stderr}\n{log}"
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{:?}\n{stderr}\n{log}",
+        out.status
     );
+    assert!(!log.contains("without a fault"), "{log}");
+    assert!(
+        log.contains("ERROR HardFault: stack overflow (sp=0x1"),
+        "no stack overflow reported below the stack's bottom:\n{stderr}\n{log}"
+    );
+    assert!(!stderr.contains("Lockup"), "{stderr}\n{log}");
+    eprintln!("{log}");
 }
 
 /// The helper the smoke and fault tests boot QEMU with cannot hang: a run that does not end
