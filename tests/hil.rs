@@ -643,9 +643,40 @@ fn elf_sizes(elf: &Path) -> ElfSizes {
     }
 }
 
+/// How long one [`qemu_semihosting`] run may take before the test kills QEMU and fails:
+/// the smoke run, the fault hooks and the math benchmark (`bench`) each end in under a
+/// tenth of a second of wall time on an idle machine (0.03 s, 0.2 s for the whole test,
+/// 0.06 s), so a thousand times that is left for a loaded one.
+const SEMIHOSTING_RUN_DEADLINE: Duration = Duration::from_secs(60);
+
+/// A QEMU child that is killed (by its PID, `Child::kill`) and reaped if the test unwinds
+/// before it has been waited for.
+struct KillOnDrop(std::process::Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        if let Ok(None) = self.0.try_wait() {
+            let _ = self.0.kill();
+            let _ = self.0.wait();
+        }
+    }
+}
+
 /// Boot `elf` in QEMU as the `cargo fw` runner in .cargo/config.toml does (semihosting on,
 /// UART unused, `-icount shift=10`), with an optional boot word, and wait for it to exit.
+/// A run that has not ended after [`SEMIHOSTING_RUN_DEADLINE`] is killed by its PID and
+/// fails the test, with what the firmware had logged until then.
 fn qemu_semihosting(elf: &Path, boot_word: Option<&str>) -> std::process::Output {
+    qemu_semihosting_within(elf, boot_word, SEMIHOSTING_RUN_DEADLINE)
+}
+
+/// [`qemu_semihosting`] with its deadline.
+fn qemu_semihosting_within(
+    elf: &Path,
+    boot_word: Option<&str>,
+    deadline: Duration,
+) -> std::process::Output {
+    use std::io::Read;
     let mut cmd = Process::new(hil::QEMU);
     cmd.args([
         "-machine",
@@ -660,9 +691,48 @@ fn qemu_semihosting(elf: &Path, boot_word: Option<&str>) -> std::process::Output
     if let Some(word) = boot_word {
         cmd.args(["-append", word]);
     }
-    cmd.stdin(Stdio::null())
-        .output()
-        .expect("run qemu-system-arm")
+    let mut qemu = KillOnDrop(
+        cmd.stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run qemu-system-arm"),
+    );
+    let pid = qemu.0.id();
+    // Both pipes are drained while QEMU runs, so that it never blocks on a full one.
+    let drain = |pipe: Option<Box<dyn Read + Send>>| {
+        let mut pipe = pipe.expect("piped");
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            let _ = pipe.read_to_end(&mut bytes);
+            bytes
+        })
+    };
+    let stdout = drain(qemu.0.stdout.take().map(|p| Box::new(p) as _));
+    let stderr = drain(qemu.0.stderr.take().map(|p| Box::new(p) as _));
+    let end = std::time::Instant::now() + deadline;
+    let status = loop {
+        match qemu.0.try_wait().expect("wait for QEMU") {
+            Some(status) => break Some(status),
+            None if std::time::Instant::now() >= end => break None,
+            None => std::thread::sleep(Duration::from_millis(10)),
+        }
+    };
+    let Some(status) = status else {
+        drop(qemu); // kills QEMU by its PID, so the pipes close
+        let (stdout, stderr) = (stdout.join().unwrap(), stderr.join().unwrap());
+        panic!(
+            "QEMU (pid {pid}, boot word {boot_word:?}) did not end within {deadline:?}: \
+             killed. The firmware logged:\n{}QEMU's stderr:\n{}",
+            hil::decode_defmt_log(elf, &stdout).unwrap_or_else(|e| e.to_string()),
+            String::from_utf8_lossy(&stderr)
+        );
+    };
+    std::process::Output {
+        status,
+        stdout: stdout.join().unwrap(),
+        stderr: stderr.join().unwrap(),
+    }
 }
 
 /// The smoke run's decoded log, ending with its exit status.
@@ -1294,23 +1364,70 @@ fn panic_and_hardfault_end_the_qemu_run_with_a_failure_status() {
     assert!(log.contains("ERROR HardFault at pc="), "{log}");
 }
 
-/// The stack sits below the statics (memory.x): running past its bottom faults on the
-/// unmapped memory under RAM instead of overwriting `.bss` silently, and the run fails.
+/// The stack sits below the statics (memory.x), and the MPU forbids every access to the
+/// 256 MiB below RAM (`boards/mps2-an386/src/fault.rs`: QEMU's mps2-an386 ignores writes
+/// there instead of faulting). Running past the stack's bottom faults at its first access
+/// instead of overwriting `.bss` or running on, the HardFault handler says it was a stack
+/// overflow, and the run ends with a failure status (not a lockup, and not a hang: before
+/// the guard, a build whose `memset` kept nothing on the stack recursed down into the code
+/// and spun there).
 #[test]
 fn a_stack_overflow_faults_instead_of_corrupting_the_statics() {
     let elf = firmware();
+    let bottom = Elf(std::fs::read(&elf).unwrap()).symbol("_stack_end");
+    assert_eq!(
+        bottom,
+        Some(0x2000_0000),
+        "the MPU guard ends at 0x2000_0000 (fault.rs, GUARD_END): memory.x must put the stack's bottom there"
+    );
     let out = qemu_semihosting(&elf, Some("fault-stack-overflow"));
     let (log, stderr) = (
         decode_defmt(&elf, &out.stdout),
         String::from_utf8_lossy(&out.stderr),
     );
-    assert!(!out.status.success(), "{:?}\n{log}", out.status);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{:?}\n{stderr}\n{log}",
+        out.status
+    );
     assert!(!log.contains("without a fault"), "{log}");
-    // The fault cannot stack its exception frame either, so the core locks up (QEMU
-    // aborts with "Lockup"; a real part resets): either way the run ends as a failure.
     assert!(
-        stderr.contains("Lockup") || log.contains("HardFault"),
-        "{stderr}\n{log}"
+        log.contains("ERROR HardFault: stack overflow (sp=0x1"),
+        "no stack overflow reported below the stack's bottom:\n{stderr}\n{log}"
+    );
+    assert!(!stderr.contains("Lockup"), "{stderr}\n{log}");
+    eprintln!("{log}");
+}
+
+/// The helper the smoke and fault tests boot QEMU with cannot hang: a run that does not end
+/// (here the UART server, waiting for frames on a UART that QEMU connects to nothing) is
+/// killed by its PID at the deadline and fails, saying so.
+#[test]
+fn a_semihosting_run_that_does_not_end_is_killed_at_its_deadline() {
+    let elf = firmware();
+    let started = std::time::Instant::now();
+    let panic = std::panic::catch_unwind(|| {
+        qemu_semihosting_within(&elf, Some("uart"), Duration::from_secs(2))
+    })
+    .expect_err("the UART server never ends on its own");
+    let msg = panic.downcast_ref::<String>().cloned().unwrap_or_default();
+    assert!(msg.contains("did not end within 2s: killed"), "{msg}");
+    assert!(msg.contains("INFO dexter-firmware"), "{msg}");
+    let pid: u32 = msg
+        .split("QEMU (pid ")
+        .nth(1)
+        .and_then(|rest| rest.split(',').next())
+        .and_then(|pid| pid.parse().ok())
+        .unwrap_or_else(|| panic!("no pid in {msg}"));
+    assert!(
+        !Path::new(&format!("/proc/{pid}")).exists(),
+        "QEMU (pid {pid}) still running after the deadline"
+    );
+    assert!(
+        started.elapsed() < Duration::from_secs(30),
+        "{:?}",
+        started.elapsed()
     );
 }
 

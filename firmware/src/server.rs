@@ -34,8 +34,8 @@ use crate::board::StepTimer;
 use crate::hosted::{Hosted, Params};
 use dexter_core::fixed_rate::{Fault, Telemetry};
 use dexter_core::protocol::{
-    encode, Command, DecodeError, DeviceMessage, Frame, FrameDecoder, HostMessageOf, HostedKinds,
-    Kind, Partial, Rejection, RunSummary, MAX_FRAME_LEN,
+    decode_exact, Command, DecodeError, DeviceMessage, Frame, FrameDecoder, HostMessageOf,
+    HostVariant, HostedKinds, Kind, Partial, Rejection, RunSummary, MAX_FRAME_LEN,
 };
 
 /// A host message as this image decodes it: the wire form of
@@ -101,12 +101,44 @@ impl SessionHook for () {
     fn configured(&mut self, _: Kind) {}
 }
 
+/// Where the server decodes what the host sends: each message into its own slot, so that
+/// no message is moved after it is decoded (a [`HostMessage`] is as large as the largest
+/// parameter set; a sensor frame is a fraction of it).
+struct Inbox {
+    /// The last `Configure`'s parameters.
+    config: Partial<Params>,
+    /// The last `Sensor` frame.
+    frame: Frame,
+}
+
+impl Inbox {
+    /// Decode a frame's payload into its slot; which message it was.
+    fn decode(&mut self, payload: &[u8]) -> Result<HostVariant, DecodeError> {
+        let (variant, body) = HostVariant::split(payload)?;
+        match variant {
+            HostVariant::Sensor => self.frame.decode_from(body)?,
+            HostVariant::Configure => self.decode_config(body)?,
+            HostVariant::Stop if body.is_empty() => {}
+            HostVariant::Stop => return Err(DecodeError::Payload),
+        }
+        Ok(variant)
+    }
+
+    /// `Configure`'s parameters, out of line: it is rare, and its decoder is large.
+    #[inline(never)]
+    fn decode_config(&mut self, body: &[u8]) -> Result<(), DecodeError> {
+        self.config = decode_exact(body)?;
+        Ok(())
+    }
+}
+
 /// The server state.
 pub struct Server<L, T, H = ()> {
     link: L,
     timer: T,
     hook: H,
     decoder: FrameDecoder<MAX_FRAME_LEN>,
+    inbox: Inbox,
     controller: Option<Hosted>,
     last_seq: u32,
     missed: u32,
@@ -139,6 +171,10 @@ where
             timer,
             hook,
             decoder: FrameDecoder::new(),
+            inbox: Inbox {
+                config: Partial::NotHosted(Kind::Line),
+                frame: Frame::Line(Default::default()),
+            },
             controller: None,
             last_seq: 0,
             missed: 0,
@@ -164,33 +200,43 @@ where
                 Ok(n) => n,
                 Err(_) => return Exit::LinkFailed,
             };
-            for &byte in buf.get(..n).unwrap_or(&[]) {
-                if let Some(result) = self.decoder.push::<HostMessage>(byte) {
-                    if let Some(exit) = self.handle(result) {
-                        return exit;
-                    }
+            let mut bytes = buf.get(..n).unwrap_or(&[]);
+            while !bytes.is_empty() {
+                let (used, received) = self.receive(bytes);
+                bytes = bytes.get(used..).unwrap_or(&[]);
+                if let Some(exit) = received.and_then(|r| self.handle(r)) {
+                    return exit;
                 }
             }
         }
     }
 
+    /// Feed `bytes` to the decoder up to the first frame's end: the bytes used and, if a
+    /// frame ended, which message it was (decoded into the inbox) or why it was rejected.
+    #[inline(never)] // not part of `run`, the wait for a frame (scripts/hil-guest-count.sh)
+    fn receive(&mut self, bytes: &[u8]) -> (usize, Option<Result<HostVariant, DecodeError>>) {
+        let inbox = &mut self.inbox;
+        self.decoder.feed(bytes, |payload| inbox.decode(payload))
+    }
+
     /// Answer one frame (see the table in the module docs).
-    fn handle(&mut self, result: Result<HostMessage, DecodeError>) -> Option<Exit> {
-        match result {
-            Ok(HostMessage::Configure(config)) => self.configure(&config),
-            Ok(HostMessage::Sensor(frame)) => match self.check_kind(&frame) {
-                Ok(()) => self.step(&frame),
+    #[inline(never)] // not part of `run`, the wait for a frame (scripts/hil-guest-count.sh)
+    fn handle(&mut self, received: Result<HostVariant, DecodeError>) -> Option<Exit> {
+        match received {
+            Ok(HostVariant::Configure) => self.configure(),
+            Ok(HostVariant::Sensor) => match self.check_kind(&self.inbox.frame) {
+                Ok(()) => self.step(),
                 Err(rejection) => self.send(&DeviceMessage::Rejected(rejection)),
             },
-            Ok(HostMessage::Stop) => self.stop(),
+            Ok(HostVariant::Stop) => self.stop(),
             Err(e) => self.period_without_frame(e),
         }
     }
 
-    fn configure(&mut self, config: &Partial<Params>) -> Option<Exit> {
+    fn configure(&mut self) -> Option<Exit> {
         // A refused configuration leaves no controller: the host asked for another one.
         self.controller = None;
-        let params = match config {
+        let params = match &self.inbox.config {
             Partial::Hosted(params) => params,
             Partial::NotHosted(kind) => {
                 defmt::warn!("controller kind {} is not hosted by this image", kind);
@@ -226,10 +272,11 @@ where
         }
     }
 
-    /// One control step on a frame of the configured kind, answered with its command.
-    fn step(&mut self, frame: &Frame) -> Option<Exit> {
+    /// One control step on the inbox's frame, of the configured kind, answered with its
+    /// command.
+    fn step(&mut self) -> Option<Exit> {
         let controller = self.controller.as_mut()?;
-        let (command, instructions) = controller.step(frame, &self.timer).ok()?;
+        let (command, instructions) = controller.step(&self.inbox.frame, &self.timer).ok()?;
         self.last_seq = command.reply().0;
         self.missed = 0;
         self.record(instructions);
@@ -299,7 +346,7 @@ where
     }
 
     fn send(&mut self, message: &DeviceMessage) -> Option<Exit> {
-        let Ok(n) = encode(message, &mut self.tx) else {
+        let Ok(n) = message.encode(&mut self.tx) else {
             defmt::error!("reply does not fit a frame");
             return Some(Exit::LinkFailed);
         };
@@ -373,19 +420,22 @@ impl FreeRunning {
                 Ok(n) => n,
                 Err(_) => return Some(Exit::LinkFailed),
             };
-            for &byte in buf.get(..n).unwrap_or(&[]) {
-                let exit = match server.decoder.push::<HostMessage>(byte) {
-                    Some(Ok(HostMessage::Sensor(frame))) => match server.check_kind(&frame) {
+            let mut bytes = buf.get(..n).unwrap_or(&[]);
+            while !bytes.is_empty() {
+                let (used, received) = server.receive(bytes);
+                bytes = bytes.get(used..).unwrap_or(&[]);
+                let exit = match received {
+                    Some(Ok(HostVariant::Sensor)) => match server.check_kind(&server.inbox.frame) {
                         Ok(()) => {
-                            period.latest = Some(frame);
+                            period.latest = Some(server.inbox.frame);
                             None
                         }
                         Err(r) => server.send(&DeviceMessage::Rejected(r)),
                     },
-                    Some(Ok(HostMessage::Stop)) => server.stop(),
-                    Some(Ok(other)) => {
+                    Some(Ok(HostVariant::Stop)) => server.stop(),
+                    Some(Ok(HostVariant::Configure)) => {
                         period.start = clock();
-                        server.handle(Ok(other))
+                        server.configure()
                     }
                     Some(Err(e)) => {
                         defmt::debug!("frame rejected: {}", e);
@@ -410,7 +460,8 @@ impl FreeRunning {
         match period.latest.take() {
             Some(frame) => {
                 period.missed = 0;
-                server.step(&frame)
+                server.inbox.frame = frame;
+                server.step()
             }
             None => {
                 let controller = server.controller.as_mut()?;

@@ -2,8 +2,9 @@
 //!
 //! `memory.x` reserves the stack as a region of its own at the bottom of RAM,
 //! `[_stack_end, _stack_start)`, below the statics (flip-link's layout without the tool):
-//! the stack grows down towards the start of RAM, so an overflow runs into unmapped memory
-//! and faults instead of silently overwriting `.bss`. At reset cortex-m-rt (feature
+//! the stack grows down towards the start of RAM, so an overflow runs out of RAM and
+//! faults (each board's MPU guard makes sure of it: `boards/*/src/fault.rs`) instead of
+//! silently overwriting `.bss`. At reset cortex-m-rt (feature
 //! `paint-stack`) fills the region with [`cortex_m_rt::STACK_PAINT_VALUE`]; [`usage`] finds
 //! the lowest word that is no longer paint. The figure counts the words the code wrote, so
 //! a frame that reserves a buffer it never touches is not counted; every buffer in this

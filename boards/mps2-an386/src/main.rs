@@ -5,13 +5,14 @@
 //! - `freerun`: free-running fixed-rate mode on UART0 (500 Hz on SysTick, link timeout
 //!   after 5 periods without a valid frame): a board fed sensor frames over its link;
 //! - `fault-panic`, `fault-hardfault`, `fault-stack-overflow`: test hooks that panic,
-//!   execute `udf`, or recurse past the reserved stack, to check that each ends the QEMU run
-//!   with a failure status;
+//!   execute `udf`, or recurse past the reserved stack into the MPU's guard ([`fault`]),
+//!   to check that each ends the QEMU run with a failure status;
 //! - `bench` (feature `bench`): per-call instruction counts of the math kernels.
 //!
 //! This binary also holds what a QEMU run needs once (knurling app-template style): the
 //! defmt global logger (semihosting stdout), the panic handler and a `HardFault` handler
-//! that both end the run with a failure status, and [`exit`]. The board-neutral library
+//! ([`fault`], with the stack's MPU guard) that both end the run with a failure status,
+//! and [`exit`]. The board-neutral library
 //! (`dexter_firmware`) holds none of them, nor semihosting: a real board links its own.
 #![no_std]
 #![no_main]
@@ -28,6 +29,8 @@ use uart0 as mps2_an386;
 
 #[cfg(feature = "bench")]
 mod bench;
+mod fault;
+mod mem;
 mod semihosting;
 mod smoke;
 mod systick;
@@ -115,6 +118,7 @@ fn main() -> ! {
     let Some(mut cp) = cortex_m::Peripherals::take() else {
         exit(false)
     };
+    fault::guard_stack(&cp.MPU);
     let timer = SysTickInstructions::new(cp.SYST);
     let mode = boot_mode();
     defmt::info!(
@@ -181,7 +185,8 @@ fn uart(nvic: &mut cortex_m::peripheral::NVIC) -> PlantLink {
     }
 }
 
-/// Test hook: recursion with a 256-byte frame per call, until the stack overflows.
+/// Test hook: recursion with a 256-byte frame per call, until the stack overflows into the
+/// MPU's guard ([`fault`]).
 #[inline(never)]
 fn recurse(depth: u32) -> u32 {
     let frame = core::hint::black_box([depth as u8; 256]);
@@ -240,12 +245,5 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 /// defmt's own panics (e.g. `defmt::unwrap!`) go through the same path.
 #[defmt::panic_handler]
 fn defmt_panic() -> ! {
-    exit(false)
-}
-
-/// A HardFault ends the run with a failure status instead of spinning.
-#[exception]
-unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    defmt::error!("HardFault at pc={=u32:#010x}", frame.pc());
     exit(false)
 }

@@ -7,7 +7,7 @@
 //! [`DeviceMessage::Rejected`] ([`Rejection::WrongKind`]), never a panic. A firmware image
 //! decodes only the parameters and frames of the kinds it hosts ([`Partial`]).
 
-use super::framing::{DecodeError, MAX_PAYLOAD_LEN};
+use super::framing::{DecodeError, EncodeError, MAX_PAYLOAD_LEN};
 use super::kinds::{Command, Config, Frame, Kind};
 use crate::fixed_rate::Telemetry;
 use serde::{Deserialize, Serialize};
@@ -30,6 +30,52 @@ pub enum HostMessageOf<C, F> {
     /// Ask the firmware to end the run: it answers [`DeviceMessage::Stopped`] and exits the
     /// emulator with success.
     Stop,
+}
+
+/// Which message a [`HostMessageOf`] payload holds: its variant, as postcard writes it
+/// (a varint index, in declaration order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HostVariant {
+    /// [`HostMessageOf::Configure`].
+    Configure,
+    /// [`HostMessageOf::Sensor`].
+    Sensor,
+    /// [`HostMessageOf::Stop`].
+    Stop,
+}
+
+impl HostVariant {
+    /// Split a host message's payload (a frame's, CRC checked: [`FrameDecoder::feed`])
+    /// into its variant and the postcard bytes of the variant's value, read as the derived
+    /// decoder of [`HostMessageOf`] reads them: decoding that value with [`decode_exact`]
+    /// (nothing for `Stop`: its bytes must be empty) accepts and rejects exactly the
+    /// payloads `decode_exact::<HostMessageOf<C, F>>` does. A firmware thus decodes each
+    /// message straight into the place it keeps it, and never moves a whole message.
+    ///
+    /// [`FrameDecoder::feed`]: super::FrameDecoder::feed
+    /// [`decode_exact`]: super::decode_exact
+    pub fn split(payload: &[u8]) -> Result<(HostVariant, &[u8]), DecodeError> {
+        let (index, body) =
+            postcard::take_from_bytes::<u32>(payload).map_err(|_| DecodeError::Payload)?;
+        let variant = match index {
+            0 => HostVariant::Configure,
+            1 => HostVariant::Sensor,
+            2 => HostVariant::Stop,
+            _ => return Err(DecodeError::Payload),
+        };
+        Ok((variant, body))
+    }
+}
+
+impl Frame {
+    /// Decode a [`Frame`] from all of `bytes` ([`decode_exact`](super::decode_exact)) into
+    /// `self`, left as it was on an error. Compiled once, here, with the core's
+    /// speed-optimised profile (Cargo.toml), for the firmware's hot path.
+    #[inline(never)]
+    pub fn decode_from(&mut self, bytes: &[u8]) -> Result<(), DecodeError> {
+        *self = super::decode_exact(bytes)?;
+        Ok(())
+    }
 }
 
 /// The hosted part of a kind-indexed enum ([`Config`] or [`Frame`]) of a firmware image:
@@ -179,4 +225,14 @@ pub enum DeviceMessage {
     Rejected(Rejection),
     /// Answer to `Stop`, sent just before the firmware ends the run.
     Stopped(RunSummary),
+}
+
+impl DeviceMessage {
+    /// [`encode`](super::encode) this message as one delimited frame into `out`: the bytes
+    /// written. Compiled once, here, with the core's speed-optimised profile (Cargo.toml),
+    /// for the firmware's hot path (its answer to every control period).
+    #[inline(never)]
+    pub fn encode(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
+        super::encode(self, out)
+    }
 }

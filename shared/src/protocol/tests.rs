@@ -236,3 +236,143 @@ fn a_kind_index_past_the_list_is_a_payload_error() {
     let n = cobs::try_encode(&raw, &mut out).unwrap();
     assert_eq!(decode::<Decoded>(&mut out[..n]), Err(DecodeError::Payload));
 }
+
+// The hand-written CRC, COBS encoder and streaming COBS decoder of the framing, against
+// independent implementations: the `crc` crate's CRC-32C and the `cobs` crate's encoder
+// and decoder, over random bytes biased to zeros and to long runs without one (the COBS
+// corner cases: a block of 254 non-zero bytes, frames ending inside a block).
+mod hand_written {
+    use super::framing::{self, cobs_encode_in_place, crc32c, CRC32C};
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Random bytes: mostly zeros, mostly non-zero, or uniform, with long non-zero runs.
+    fn bytes(max: usize) -> impl Strategy<Value = Vec<u8>> {
+        prop_oneof![
+            prop::collection::vec(any::<u8>(), 0..=max),
+            prop::collection::vec(prop_oneof![Just(0u8), any::<u8>()], 0..=max),
+            prop::collection::vec(1u8..=255, 0..=max),
+            (0..=max, 200usize..=300, any::<u8>()).prop_map(move |(zero_at, len, fill)| {
+                let mut v = vec![fill | 1; len.min(max)];
+                if let Some(b) = v.get_mut(zero_at) {
+                    *b = 0;
+                }
+                v
+            }),
+        ]
+    }
+
+    /// The reference frame: `cobs` crate's encoding of `payload ++ crc` and the delimiter.
+    fn reference_frame(payload: &[u8]) -> Vec<u8> {
+        let mut raw = payload.to_vec();
+        raw.extend_from_slice(&CRC32C.checksum(payload).to_le_bytes());
+        let mut frame = cobs::encode_vec(&raw);
+        frame.push(0);
+        frame
+    }
+
+    /// What the old decoder (the `cobs` crate's, a frame at a time) says of the bytes
+    /// between two delimiters: the payload, or why the frame is rejected.
+    fn reference_decode(segment: &[u8], capacity: usize) -> Result<Vec<u8>, DecodeError> {
+        if segment.len() > capacity {
+            return Err(DecodeError::Overlong);
+        }
+        let mut copy = segment.to_vec();
+        let n = cobs::decode_in_place(&mut copy).map_err(|_| DecodeError::Cobs)?;
+        if n < CRC_LEN {
+            return Err(DecodeError::TooShort);
+        }
+        let (payload, trailer) = copy[..n].split_at(n - CRC_LEN);
+        if CRC32C.checksum(payload).to_le_bytes() != trailer {
+            return Err(DecodeError::Crc);
+        }
+        Ok(payload.to_vec())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        #[test]
+        fn crc32c_is_the_crc_crates(data in bytes(300)) {
+            prop_assert_eq!(crc32c(&data), CRC32C.checksum(&data));
+        }
+
+        #[test]
+        fn cobs_in_place_is_the_cobs_crates_encoding_or_declines(raw in bytes(MAX_PAYLOAD_LEN + CRC_LEN)) {
+            let mut out = [0u8; MAX_FRAME_LEN];
+            out[1..=raw.len()].copy_from_slice(&raw);
+            let mut expected = cobs::encode_vec(&raw);
+            expected.push(0);
+            let longest_run = raw.split(|&b| b == 0).map(<[u8]>::len).max().unwrap_or(0);
+            match cobs_encode_in_place(&mut out, raw.len()) {
+                Some(n) => prop_assert_eq!(&out[..n], &expected[..]),
+                // only a block of 254 non-zero bytes needs the crate's encoder
+                None => prop_assert!(longest_run >= 254, "declined a run of {}", longest_run),
+            }
+        }
+
+        #[test]
+        fn encode_is_cobs_of_postcard_and_crc(payload in bytes(MAX_PAYLOAD_LEN)) {
+            // any postcard payload: a length and the bytes
+            let value: &[u8] = &payload;
+            let mut out = [0u8; MAX_FRAME_LEN];
+            let mut payload_bytes = [0u8; MAX_PAYLOAD_LEN + 8];
+            let postcard_bytes = postcard::to_slice(&value, &mut payload_bytes);
+            let result = encode(&value, &mut out);
+            match postcard_bytes {
+                Ok(p) if p.len() <= MAX_PAYLOAD_LEN => {
+                    let n = result.unwrap();
+                    prop_assert_eq!(&out[..n], &reference_frame(p)[..]);
+                }
+                _ => prop_assert_eq!(result, Err(EncodeError::BufferTooSmall)),
+            }
+        }
+
+        #[test]
+        fn the_streaming_decoder_agrees_with_the_cobs_crate_frame_by_frame(
+            payloads in prop::collection::vec(bytes(80), 0..6),
+            garbage in prop::collection::vec(bytes(90), 0..6),
+            chunk in 1usize..70,
+        ) {
+            const N: usize = 64;
+            // valid frames and garbage, interleaved
+            let mut stream = Vec::new();
+            for i in 0..payloads.len().max(garbage.len()) {
+                if let Some(p) = payloads.get(i) {
+                    stream.extend(reference_frame(p));
+                }
+                if let Some(g) = garbage.get(i) {
+                    stream.extend(g);
+                }
+            }
+            stream.push(0);
+            let expected: Vec<_> = stream
+                .split(|&b| b == 0)
+                .filter(|segment| !segment.is_empty())
+                .map(|segment| reference_decode(segment, N))
+                .collect();
+            let mut dec = FrameDecoder::<N>::new();
+            let mut got = Vec::new();
+            for piece in stream.chunks(chunk) {
+                let mut rest = piece;
+                while !rest.is_empty() {
+                    let (used, result) = dec.feed(rest, |payload| Ok(payload.to_vec()));
+                    prop_assert!(used > 0 && used <= rest.len());
+                    rest = &rest[used..];
+                    got.extend(result);
+                }
+            }
+            prop_assert_eq!(&got, &expected);
+            let stats = dec.stats();
+            prop_assert_eq!(stats.frames_ok as usize, expected.iter().filter(|r| r.is_ok()).count());
+            prop_assert_eq!(stats.errors() as usize, expected.iter().filter(|r| r.is_err()).count());
+        }
+    }
+
+    #[test]
+    fn the_nibble_table_is_the_crc_crates_byte_table_at_multiples_of_16() {
+        // and so the first 16 bits of CRC-32C: a spot check beside the property
+        assert_eq!(crc32c(b"123456789"), 0xE306_9283);
+        assert_eq!(framing::crc32c(&[]), CRC32C.checksum(&[]));
+    }
+}
