@@ -367,7 +367,8 @@ impl FixedRate for ArmController {
     /// cosine), and the static worst case over every path of
     /// `<ArmController as FixedRate>::step` in the arm image as flashed, callees
     /// included (`scripts/wcet.py`, run by `scripts/test.sh` with `--max-instructions 416`),
-    /// is 395 instructions, 713 Cortex-M4 cycles (2026-12-04; 396 before the safe state's brake and coast were written once, in `Tracker::brake_and_coast`; 2026-12-02, with the move to rest
+    /// is 396 instructions, 715 Cortex-M4 cycles (2026-12-07, with the sequence check's one
+    /// comparison, `Freshness::check`, one longer on this path; 395 on 2026-12-04; 396 before the safe state's brake and coast were written once, in `Tracker::brake_and_coast`; 2026-12-02, with the move to rest
     /// computed once by `new`, brake or bang-bang alike; 415 when the brake was evaluated
     /// from the spline's end every step; at most 416 by that check). The HIL measurement
     /// window of the size-optimised firmware adds 8 to what it reports: 10 instructions between its two SysTick reads around the call
