@@ -279,8 +279,8 @@ impl Actuator for SecondOrderActuator {
     /// paddle at speed `|v| <= V = v_max (1 - m) - a W` stays below `v_max (1 - m)` and
     /// travels at most `D = W (V + a W / 2)`; with its height at least `D (1 + m)` from
     /// either stop neither limit is within reach, by `m` = 1e-6 relative where
-    /// [`speed_limit_out_of_reach`](Self::speed_limit_out_of_reach) and
-    /// [`stops_out_of_reach`](Self::stops_out_of_reach) ask for 1e-9: so those tests
+    /// `speed_limit_out_of_reach` and
+    /// `stops_out_of_reach` ask for 1e-9: so those tests
     /// clear every state in the box and the regime outlasts the segment. Empty
     /// ([`QuietBox::NEVER`]) when the limits leave no such state.
     fn quiet_box(&self, max_window_s: f64) -> QuietBox {
