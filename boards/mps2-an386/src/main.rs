@@ -196,7 +196,7 @@ fn recurse(depth: u32) -> u32 {
     recurse(depth - 1).wrapping_add(u32::from(core::hint::black_box(frame)[255]))
 }
 
-/// Device interrupts: every entry of [`vectors::__INTERRUPTS`] comes here.
+/// Device interrupts: every entry of `vectors::__INTERRUPTS` (below) comes here.
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
     mps2_an386::on_interrupt(irqn);
