@@ -26,6 +26,17 @@ impl Poly {
     pub fn velocity_at(&self, t_s: f64) -> f64 {
         self.velocity_mps + self.accel_mps2 * t_s
     }
+
+    /// The coefficients of the gap `ball - paddle = c0 + c1 t + c2 t^2` over the segment,
+    /// under gravity `g`: m, m/s, m/s^2.
+    #[inline(always)]
+    pub fn gap_to(&self, ball: &BallState<f64>, g: f64) -> (f64, f64, f64) {
+        (
+            ball.height_m - self.height_m,
+            ball.velocity_mps - self.velocity_mps,
+            -0.5 * (g + self.accel_mps2),
+        )
+    }
 }
 
 /// How a flight segment ended.
@@ -136,9 +147,7 @@ pub struct Ballistic;
 impl Flight for Ballistic {
     #[inline]
     fn fly(&mut self, ball: &mut BallState<f64>, paddle: &Poly, h_s: f64, g: f64) -> FlightEnd {
-        let c0 = ball.height_m - paddle.height_m;
-        let c1 = ball.velocity_mps - paddle.velocity_mps;
-        let c2 = -0.5 * (g + paddle.accel_mps2);
+        let (c0, c1, c2) = paddle.gap_to(ball, g);
         match first_contact(c0, c1, c2, h_s) {
             Some(c) => {
                 *ball = ball.flown(c.time_s, g);
@@ -163,9 +172,7 @@ impl Flight for Ballistic {
         h_s: f64,
         g: f64,
     ) -> FlightEnd {
-        let c0 = ball.height_m - paddle.height_m;
-        let c1 = ball.velocity_mps - paddle.velocity_mps;
-        let c2 = -0.5 * (g + paddle.accel_mps2);
+        let (c0, c1, c2) = paddle.gap_to(ball, g);
         if clearly_apart(c0, c1, c2, h_s) {
             *ball = ball.flown(h_s, g);
             return FlightEnd::Reached(h_s);
@@ -186,9 +193,7 @@ impl Flight for Ballistic {
         h_s: f64,
         g: f64,
     ) -> Option<BallState<f64>> {
-        let c0 = ball.height_m - paddle.height_m;
-        let c1 = ball.velocity_mps - paddle.velocity_mps;
-        let c2 = -0.5 * (g + paddle.accel_mps2);
+        let (c0, c1, c2) = paddle.gap_to(ball, g);
         super::roots::apart_by_margin(c0, c1, c2, h_s).then(|| ball.flown(h_s, g))
     }
 
