@@ -83,6 +83,31 @@ fn real_table_camera_latencies_in_the_documented_range_are_accepted() {
     }
 }
 
+/// A camera holds 4 096 samples in flight (docs/planar.md): at 100 kHz that is 40.96 ms of
+/// latency; 50 ms (5 000 in flight) is refused naming the latency and the count, where it
+/// used to drop the oldest samples silently; 40.96 ms is accepted.
+#[test]
+fn real_table_camera_samples_in_flight_are_bounded_by_what_it_holds() {
+    let rate = "real_table.camera.rate_hz=100000.0".to_string();
+    let (code, err) = real_table(&[rate.clone(), "real_table.camera.latency_s=0.04096".into()]);
+    assert_ne!(code, Some(2), "{err}");
+    let s = scene("planar-triangle-sil");
+    let err = refused(
+        &[
+            "run",
+            &s,
+            "--impacts",
+            "1",
+            "--set",
+            &rate,
+            "--set",
+            "real_table.camera.latency_s=0.05",
+        ],
+        "real_table.camera.latency_s",
+    );
+    assert!(err.contains("4096") && err.contains("5000"), "{err}");
+}
+
 /// A run of `name` with `sets`.
 fn with_sets(name: &str, extra: &[&str], sets: &[&str]) -> (Option<i32>, String) {
     let s = scene(name);
