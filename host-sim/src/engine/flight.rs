@@ -1,6 +1,6 @@
 //! Ball flight between events, against a paddle that moves as a quadratic in time.
 
-use super::roots::{apart_by_margin_of, clearly_apart, first_contact};
+use super::roots::{apart_by_margin, apart_by_margin_of, clearly_apart, first_contact};
 use dexter_core::state::BallState;
 
 /// The paddle over one segment, in segment-local time t (s):
@@ -74,39 +74,24 @@ pub trait Flight {
     ) -> FlightEnd {
         self.fly(ball, paddle, h_s, g)
     }
-    /// True if the flight is in closed form and [`clear_flight`](Flight::clear_flight) and
-    /// [`clear_flight_of`](Flight::clear_flight_of) can answer (`false`: they never do, and
-    /// a loop skips asking).
+    /// True if the flight is in closed form and [`clear_flight`](Flight::clear_flight) can
+    /// answer (`false`: it never does, and a loop skips asking).
     const CLOSED_FORM: bool = false;
-    /// The ball after `h_s` seconds if a cheap test proves it cannot meet `paddle` within
-    /// them: what [`fly_short`](Flight::fly_short) gives then, bit for bit. `None` when it
-    /// cannot tell (the default): the caller flies the segment.
-    #[inline(always)]
-    fn clear_flight_of(
-        &self,
-        ball: &BallState<f64>,
-        paddle: &Poly,
-        h_s: f64,
-        g: f64,
-    ) -> Option<BallState<f64>> {
-        let _ = (ball, paddle, h_s, g);
-        None
-    }
-    /// The ball after `h_s` seconds (`0 < h_s <= bound.window_s`) if a cheap bound proves
-    /// it cannot meet a paddle at `paddle_height_m` now whose speed and acceleration stay
-    /// within `bound` over the segment: what [`fly_short`](Flight::fly_short) gives then, bit
-    /// for bit. `None` when it cannot tell (the default: no such bound, as for an integrated
-    /// flight): the caller flies the segment.
+    /// The ball after `h_s` seconds (`0 < h_s <= bound.window_s`) if a cheap test proves it
+    /// cannot meet `paddle`, whose speed and acceleration stay within `bound` over the
+    /// segment: what [`fly_short`](Flight::fly_short) gives then, bit for bit. `None` when
+    /// it cannot tell (the default: no such test, as for an integrated flight): the caller
+    /// flies the segment.
     #[inline(always)]
     fn clear_flight(
         &self,
         ball: &BallState<f64>,
-        paddle_height_m: f64,
+        paddle: &Poly,
         bound: &PaddleBound,
         h_s: f64,
         g: f64,
     ) -> Option<BallState<f64>> {
-        let _ = (ball, paddle_height_m, bound, h_s, g);
+        let _ = (ball, paddle, bound, h_s, g);
         None
     }
 }
@@ -182,40 +167,27 @@ impl Flight for Ballistic {
 
     const CLOSED_FORM: bool = true;
 
-    /// [`apart_by_margin`](super::roots::apart_by_margin) on the segment's own
-    /// coefficients: where it holds, so does [`clearly_apart`], and `fly_short` flies the
-    /// ball without a contact.
-    #[inline(always)]
-    fn clear_flight_of(
-        &self,
-        ball: &BallState<f64>,
-        paddle: &Poly,
-        h_s: f64,
-        g: f64,
-    ) -> Option<BallState<f64>> {
-        let (c0, c1, c2) = paddle.gap_to(ball, g);
-        super::roots::apart_by_margin(c0, c1, c2, h_s).then(|| ball.flown(h_s, g))
-    }
-
-    /// `apart_by_margin` on bounds of the gap's coefficients: `c0` itself, `|c1| = |b' - r'|
-    /// <= |b'| + speed`, `|c2| = |g + r''| / 2 <= (g + accel) / 2` (g > 0), the segment at
-    /// most `window`. Its test is monotone in each (every rounding is), so where it holds
-    /// for the bounds it holds for the segment's own coefficients, and
-    /// [`clearly_apart`] with it: `fly_short` flies the ball without a contact.
+    /// Two tests, each of which implies [`clearly_apart`] (so `fly_short` flies the ball
+    /// without a contact): first `apart_by_margin` on bounds of the gap's coefficients,
+    /// all but `c0` constants of the loop (`|c1| = |b' - r'| <= |b'| + speed`, `|c2| =
+    /// |g + r''| / 2 <= (g + accel) / 2` for g > 0, the segment at most `window`; the test
+    /// is monotone in each, every rounding being, so where it holds for the bounds it holds
+    /// for the segment's own coefficients); where that is too wide (near the paddle, a
+    /// paddle without limits), on the segment's own coefficients.
     #[inline(always)]
     fn clear_flight(
         &self,
         ball: &BallState<f64>,
-        paddle_height_m: f64,
+        paddle: &Poly,
         bound: &PaddleBound,
         h_s: f64,
         g: f64,
     ) -> Option<BallState<f64>> {
-        let c0 = ball.height_m - paddle_height_m;
-        let c1 = ball.velocity_mps.abs() + bound.speed_mps;
-        let (w, c2w) = (bound.window_s, bound.curvature_term_mps);
-        apart_by_margin_of(c0, c1, c2w, w)
-            .then(|| flown_half(ball, h_s, g, bound.half_gravity_mps2))
+        let apart = apart_by_bound(ball, paddle.height_m, bound) || {
+            let (c0, c1, c2) = paddle.gap_to(ball, g);
+            apart_by_margin(c0, c1, c2, h_s)
+        };
+        apart.then(|| flown_half(ball, h_s, g, bound.half_gravity_mps2))
     }
 
     #[inline]
@@ -226,6 +198,14 @@ impl Flight for Ballistic {
             ball.height_m
         }
     }
+}
+
+/// `apart_by_margin` on the bound's coefficients (see [`Ballistic`]'s `clear_flight`).
+#[inline(always)]
+fn apart_by_bound(ball: &BallState<f64>, paddle_height_m: f64, bound: &PaddleBound) -> bool {
+    let c0 = ball.height_m - paddle_height_m;
+    let c1 = ball.velocity_mps.abs() + bound.speed_mps;
+    apart_by_margin_of(c0, c1, bound.curvature_term_mps, bound.window_s)
 }
 
 /// `ball.flown(h_s, g)` given `half_g = g / 2` (exact, so the same roundings): `h + v t -
@@ -260,7 +240,10 @@ mod tests {
             let ball = BallState::new(ph + 10f64.powf(gap_exp), bv);
             let h = fw.max(1e-6) * window;
             let paddle = Poly { height_m: ph, velocity_mps: fv * speed, accel_mps2: fa * accel };
-            if let Some(cleared) = Ballistic.clear_flight(&ball, ph, &bound, h, g) {
+            if apart_by_bound(&ball, ph, &bound) {
+                let cleared = Ballistic.clear_flight(&ball, &paddle, &bound, h, g);
+                prop_assert!(cleared.is_some());
+                let cleared = cleared.unwrap();
                 let mut flown = ball;
                 prop_assert_eq!(Ballistic.fly_short(&mut flown, &paddle, h, g), FlightEnd::Reached(h));
                 prop_assert_eq!(cleared.height_m.to_bits(), flown.height_m.to_bits());
@@ -278,7 +261,9 @@ mod tests {
             let h = 10f64.powf(h_exp);
             let ball = BallState::new(ph + 10f64.powf(gap_exp), bv);
             let paddle = Poly { height_m: ph, velocity_mps: pv, accel_mps2: pa };
-            if let Some(cleared) = Ballistic.clear_flight_of(&ball, &paddle, h, g) {
+            // a bound that never clears: only the segment's own coefficients decide
+            let unbounded = PaddleBound::new(f64::INFINITY, f64::INFINITY, g, h);
+            if let Some(cleared) = Ballistic.clear_flight(&ball, &paddle, &unbounded, h, g) {
                 let mut flown = ball;
                 prop_assert_eq!(Ballistic.fly_short(&mut flown, &paddle, h, g), FlightEnd::Reached(h));
                 prop_assert_eq!(cleared.height_m.to_bits(), flown.height_m.to_bits());
@@ -298,22 +283,26 @@ mod tests {
         }
     }
 
-    /// The clearance is decided by the bound, not the paddle's own state: a ball 2 mm above
-    /// a paddle at rest with a 3 m/s, 250 m/s^2 bound over 1 ms is not cleared (3 mm of
-    /// closing could pass), 5 mm above it is.
+    /// The bound's test looks at the bound, not the paddle's own state: a ball 2 mm above
+    /// a paddle at rest with a 3 m/s, 250 m/s^2 bound over 1 ms is not cleared by it (3 mm
+    /// of closing could pass), 5 mm above it is; an unbounded paddle clears nothing. The
+    /// flight is then cleared by the segment's own coefficients where those allow: the
+    /// paddle at rest, not one rising at 3 m/s.
     #[test]
     fn the_bound_decides_the_clearance() {
         let bound = PaddleBound::new(3.0, 250.0, 9.81, 1e-3);
         let at = |gap: f64| BallState::new(gap, 0.0);
-        assert!(Ballistic
-            .clear_flight(&at(0.002), 0.0, &bound, 1e-3, 9.81)
-            .is_none());
-        assert!(Ballistic
-            .clear_flight(&at(0.005), 0.0, &bound, 1e-3, 9.81)
-            .is_some());
+        assert!(!apart_by_bound(&at(0.002), 0.0, &bound));
+        assert!(apart_by_bound(&at(0.005), 0.0, &bound));
         let no_bound = PaddleBound::new(f64::INFINITY, f64::INFINITY, 9.81, 0.0);
-        assert!(Ballistic
-            .clear_flight(&at(1.0), 0.0, &no_bound, 1e-3, 9.81)
-            .is_none());
+        assert!(!apart_by_bound(&at(1.0), 0.0, &no_bound));
+        let resting = Poly::default();
+        let rising = Poly {
+            velocity_mps: 3.0,
+            ..Poly::default()
+        };
+        let clear = |p: &Poly| Ballistic.clear_flight(&at(0.002), p, &bound, 1e-3, 9.81);
+        assert!(clear(&resting).is_some());
+        assert!(clear(&rising).is_none());
     }
 }

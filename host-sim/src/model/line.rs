@@ -153,13 +153,11 @@ impl<F: Flight, S: Surface, J: Jitter> LinePlant<F, S, J> {
             return false;
         }
         let poly = self.surface.poly();
-        let (f, g) = (&self.flight, self.gravity_mps2);
-        // the bound first (a test on constants); the segment's own coefficients where it is
-        // too wide (near the paddle, or an actuator without limits)
-        let cleared = f
-            .clear_flight(&self.ball, poly.height_m, &bound, window, g)
-            .or_else(|| f.clear_flight_of(&self.ball, &poly, window, g));
-        match cleared {
+        let g = self.gravity_mps2;
+        match self
+            .flight
+            .clear_flight(&self.ball, &poly, &bound, window, g)
+        {
             Some(ball) => {
                 self.ball = ball;
                 self.surface.advance(window, false);

@@ -33,6 +33,16 @@ fn real_table(sets: &[String]) -> (Option<i32>, String) {
     run(&args)
 }
 
+/// A run of the real table with `sets`, one impact, refused naming `key`.
+fn real_table_refused(sets: &[&str], key: &str) -> String {
+    let s = scene("planar-triangle-sil");
+    let mut args = vec!["run", s.as_str(), "--impacts", "1"];
+    for set in sets {
+        args.extend(["--set", set]);
+    }
+    refused(&args, key)
+}
+
 /// Finding 12: the whole documented range of `real_table.control_rate_hz` is accepted
 /// where the documented joint rule holds (rate > (contact_iterations + 8) / (0.2 s -
 /// camera.latency_s)), and a rate the rule refuses is refused in the scene's own keys.
@@ -47,16 +57,8 @@ fn real_table_control_rates_in_the_documented_range_are_accepted() {
         assert_ne!(code, Some(2), "{rate} Hz, {iterations} steps: {err}");
     }
     // 50 Hz with the default 2 steps and 4 ms: (2 + 8) / 0.196 = 51.02 Hz needed
-    let s = scene("planar-triangle-sil");
-    let err = refused(
-        &[
-            "run",
-            &s,
-            "--impacts",
-            "1",
-            "--set",
-            "real_table.control_rate_hz=50.0",
-        ],
+    let err = real_table_refused(
+        &["real_table.control_rate_hz=50.0"],
         "real_table.control_rate_hz",
     );
     assert!(!err.contains("commit_s"), "an internal name: {err}");
@@ -71,13 +73,9 @@ fn real_table_camera_latencies_in_the_documented_range_are_accepted() {
         let (code, err) = real_table(&[format!("real_table.camera.latency_s={latency:?}")]);
         assert_ne!(code, Some(2), "latency {latency} s: {err}");
     }
-    let s = scene("planar-triangle-sil");
     for latency in ["0.1", "1.0"] {
         let set = format!("real_table.camera.latency_s={latency}");
-        let err = refused(
-            &["run", &s, "--impacts", "1", "--set", &set],
-            "real_table.camera.latency_s",
-        );
+        let err = real_table_refused(&[&set], "real_table.camera.latency_s");
         assert!(!err.contains("estimator"), "an internal name: {err}");
         assert!(err.contains("0.1"), "the range: {err}");
     }
@@ -91,18 +89,8 @@ fn real_table_camera_samples_in_flight_are_bounded_by_what_it_holds() {
     let rate = "real_table.camera.rate_hz=100000.0".to_string();
     let (code, err) = real_table(&[rate.clone(), "real_table.camera.latency_s=0.04096".into()]);
     assert_ne!(code, Some(2), "{err}");
-    let s = scene("planar-triangle-sil");
-    let err = refused(
-        &[
-            "run",
-            &s,
-            "--impacts",
-            "1",
-            "--set",
-            &rate,
-            "--set",
-            "real_table.camera.latency_s=0.05",
-        ],
+    let err = real_table_refused(
+        &[&rate, "real_table.camera.latency_s=0.05"],
         "real_table.camera.latency_s",
     );
     assert!(err.contains("4096") && err.contains("5000"), "{err}");
